@@ -1,0 +1,15 @@
+//! # regolith-fsi
+//!
+//! The SPH continuum representation model (CRM) of deformable soil: particle storage, smoothing
+//! kernels, the neighbour grid, the constitutive models ([`rheology`]), integrators, free
+//! surface and BCE-marker boundaries, on a CPU (rayon) backend and a wgpu backend.
+//!
+//! Units are SI, the world frame is Z up, stress is Cauchy with tension positive. Everything
+//! numerical is generic over [`Real`] (`f32` or `f64`).
+#![warn(missing_docs)]
+
+pub mod math;
+mod real;
+pub mod rheology;
+
+pub use real::Real;

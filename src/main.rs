@@ -1,0 +1,2 @@
+//! The `regolith` command-line tool.
+fn main() {}
