@@ -1,7 +1,21 @@
 //! # Regolith
 //!
 //! Deformable soil simulated with SPH (the continuum representation model) and coupled to rigid
-//! bodies. This facade re-exports the member crates.
+//! bodies. This facade re-exports the member crates and holds what ties them together: scene
+//! and material files, the material-point driver, plots and the command-line tool's commands.
 #![warn(missing_docs)]
 
+pub mod cli;
+pub mod element;
+pub mod input;
+pub mod material;
+pub mod plot;
+pub mod scene;
+
+pub mod element_plot;
+
 pub use regolith_fsi as fsi;
+pub use regolith_terrain as terrain;
+
+/// Default free-surface threshold on `Σ (m/ρ)(−r·∇W)`, which is 3 deep inside the soil.
+pub const DEFAULT_FREE_SURFACE_THRESHOLD: f64 = 2.0;

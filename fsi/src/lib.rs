@@ -8,6 +8,7 @@
 //! numerical is generic over [`Real`] (`f32` or `f64`).
 #![warn(missing_docs)]
 
+pub mod config;
 pub mod math;
 mod real;
 pub mod rheology;

@@ -1,8 +1,30 @@
 //! # regolith-terrain
 //!
-//! Will build soil domains for the SPH solver: box patches in containers, heightmap patches,
-//! soil blocks and columns, geostatic initial stress (σv = −ρ g depth, σh = K0 σv) and the MCC
+//! Builds soil domains for the SPH solver: box patches in containers, heightmap patches, soil
+//! blocks and columns, geostatic initial stress (σv = −ρ g depth, σh = K0 σv) and the MCC
 //! initial state (p_c0 = OCR p0, specific volume from the compression lines), with several
 //! materials per scene.
-//!
-//! Nothing here yet: the crate is filled by the terrain-solver work.
+#![warn(missing_docs)]
+
+mod heightmap;
+mod shapes;
+
+pub use heightmap::Heightmap;
+pub use shapes::{Aabb, SoilRegion, Surface};
+
+use std::path::PathBuf;
+
+/// Errors building terrain.
+#[derive(Debug, thiserror::Error)]
+pub enum TerrainError {
+    /// A heightmap file is unreadable or invalid.
+    #[error("{}{}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Heightmap {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line (CSV), when known.
+        line: Option<usize>,
+        /// What is wrong and what is allowed.
+        message: String,
+    },
+}

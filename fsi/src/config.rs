@@ -1,0 +1,114 @@
+//! Solver settings: what a scene's `[simulation]` and `[sph]` sections resolve to.
+
+/// Smoothing kernel. Support radius 2h for both.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelKind {
+    /// Wendland C2 (default): no pairing instability, smooth.
+    Wendland,
+    /// Cubic B-spline (Monaghan).
+    Cubic,
+}
+
+/// Time integrator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// Explicit midpoint (second order, two rate evaluations per step). Default.
+    Rk2,
+    /// Symplectic-style explicit Euler (first order, one rate evaluation per step).
+    Euler,
+}
+
+/// Time-step control.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TimeStep {
+    /// Fixed step (s).
+    Fixed(f64),
+    /// `dt = C min(h / (c_s + |v|max), sqrt(h / |a|max))`, recomputed every step.
+    Adaptive {
+        /// Courant number C.
+        cfl: f64,
+        /// Upper bound on the step (s).
+        max: f64,
+    },
+}
+
+/// Particle shifting (positions only), to keep the particle distribution regular.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shifting {
+    /// None.
+    None,
+    /// XSPH velocity smoothing applied to the position update.
+    Xsph,
+    /// Particle shifting along the concentration gradient (PPST-style), switched off at the
+    /// free surface.
+    Ppst,
+    /// Both.
+    PpstXsph,
+}
+
+impl Shifting {
+    /// True when XSPH is on.
+    pub fn xsph(self) -> bool {
+        matches!(self, Self::Xsph | Self::PpstXsph)
+    }
+    /// True when concentration-gradient shifting is on.
+    pub fn ppst(self) -> bool {
+        matches!(self, Self::Ppst | Self::PpstXsph)
+    }
+}
+
+/// Everything the SPH solver needs besides particles and materials.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolverConfig {
+    /// Initial particle spacing d0 (m).
+    pub spacing: f64,
+    /// h / d0.
+    pub h_factor: f64,
+    /// Kernel.
+    pub kernel: KernelKind,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Time step.
+    pub time_step: TimeStep,
+    /// Artificial viscosity coefficient α.
+    pub artificial_viscosity: f64,
+    /// Shifting.
+    pub shifting: Shifting,
+    /// XSPH coefficient ε (fraction of the smoothed velocity difference).
+    pub xsph_epsilon: f64,
+    /// PPST shifting coefficient (dimensionless, scales h² |concentration gradient|).
+    pub shifting_coefficient: f64,
+    /// Free-surface threshold on `Σ (m/ρ)(−r·∇W)` (3 in the bulk); `None` disables the
+    /// free-surface treatment.
+    pub free_surface_threshold: Option<f64>,
+    /// Gravity (m/s², world frame).
+    pub gravity: [f64; 3],
+    /// Layers of wall/body BCE markers.
+    pub bce_layers: usize,
+}
+
+impl SolverConfig {
+    /// Smoothing length h = h_factor · d0 (m).
+    pub fn h(&self) -> f64 {
+        self.h_factor * self.spacing
+    }
+}
+
+impl Default for SolverConfig {
+    fn default() -> Self {
+        Self {
+            spacing: 0.01,
+            h_factor: 1.2,
+            kernel: KernelKind::Wendland,
+            integrator: Integrator::Rk2,
+            time_step: TimeStep::Adaptive { cfl: 0.3, max: 1e-3 },
+            artificial_viscosity: 0.5,
+            shifting: Shifting::Xsph,
+            xsph_epsilon: 0.25,
+            shifting_coefficient: 0.1,
+            free_surface_threshold: Some(2.0),
+            gravity: [0.0, 0.0, -9.81],
+            bce_layers: 3,
+        }
+    }
+}

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Runs every test of the Regolith workspace, in release mode, on a fresh machine.
+#
+# Installs what the tests need when it is missing: Mesa's software Vulkan driver (lavapipe),
+# so that the wgpu tests run on a machine without a GPU. Needs root or sudo for that step only.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+have_vulkan() {
+    ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1 &&
+        { ldconfig -p 2>/dev/null | grep -q 'libvulkan\.so\.1'; }
+}
+
+if ! have_vulkan; then
+    echo "test.sh: no Vulkan driver found; installing Mesa lavapipe (mesa-vulkan-drivers libvulkan1)"
+    sudo_cmd=""
+    if [ "$(id -u)" -ne 0 ]; then sudo_cmd="sudo"; fi
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo_cmd apt-get update -qq
+    $sudo_cmd apt-get install -y -qq --no-install-recommends mesa-vulkan-drivers libvulkan1 >/dev/null
+fi
+
+cargo fmt --all -- --check
+cargo test --release --workspace --all-targets
+cargo test --release --workspace --doc

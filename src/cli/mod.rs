@@ -1,0 +1,131 @@
+//! Command-line commands. Each returns a [`Failure`]: an input error (exit code 2, one line
+//! naming the file or flag and what is allowed) or a run failure (exit code 1).
+
+mod check;
+mod element;
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+use crate::input::InputError;
+
+/// Why a command failed.
+#[derive(Debug)]
+pub enum Failure {
+    /// A wrong user input: printed as one line, exit code 2.
+    Input(InputError),
+    /// The run itself failed: exit code 1.
+    Run(anyhow::Error),
+}
+
+impl From<InputError> for Failure {
+    fn from(e: InputError) -> Self {
+        Self::Input(e)
+    }
+}
+
+impl From<anyhow::Error> for Failure {
+    fn from(e: anyhow::Error) -> Self {
+        Self::Run(e)
+    }
+}
+
+/// Regolith: deformable soil (SPH CRM) coupled to rigid bodies.
+#[derive(Debug, Parser)]
+#[command(name = "regolith", version, about, long_about = None)]
+pub struct Cli {
+    /// The command.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Floating-point precision of a run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Precision {
+    /// Single precision (what GPUs run).
+    F32,
+    /// Double precision (the reference).
+    F64,
+}
+
+/// Element tests.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TestArg {
+    /// Isotropic compression (needs --p-end).
+    Isotropic,
+    /// Drained triaxial compression at cell pressure p0 (needs --axial-strain).
+    DrainedTriaxial,
+    /// Undrained (constant volume) triaxial compression (needs --axial-strain).
+    UndrainedTriaxial,
+    /// Oedometer, laterally confined (--axial-strain or --p-end).
+    Oedometer,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Drive one material point through a laboratory test (calibration and verification).
+    #[command(allow_negative_numbers = true)]
+    Element {
+        /// Material file (TOML).
+        #[arg(long, value_name = "FILE")]
+        material: PathBuf,
+        /// The test.
+        #[arg(long, value_enum)]
+        test: TestArg,
+        /// Initial isotropic pressure, also the cell pressure (Pa).
+        #[arg(long, value_name = "PA")]
+        p0: f64,
+        /// Overconsolidation ratio, overriding the material's (MCC).
+        #[arg(long, value_name = "X")]
+        ocr: Option<f64>,
+        /// Total axial strain: natural (logarithmic), compression positive, in (0, 5] (triaxial, oedometer).
+        #[arg(long, value_name = "E", conflicts_with = "p_end")]
+        axial_strain: Option<f64>,
+        /// Final mean pressure (isotropic, oedometer), Pa.
+        #[arg(long, value_name = "PA")]
+        p_end: Option<f64>,
+        /// Unload to this mean pressure after --p-end (Pa).
+        #[arg(long, value_name = "PA", requires = "p_end")]
+        p_unload: Option<f64>,
+        /// Number of increments.
+        #[arg(long, value_name = "N", default_value_t = 2000)]
+        steps: usize,
+        /// Precision.
+        #[arg(long, value_enum, default_value_t = Precision::F64)]
+        precision: Precision,
+        /// Output directory (element.json, element.png, element.svg).
+        #[arg(long, value_name = "DIR", default_value = "out/element")]
+        out: PathBuf,
+    },
+    /// Parse and validate a scene file and print what would run.
+    Check {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Override a scene key, e.g. `--set simulation.end_time=0.5` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = crate::scene::parse_set)]
+        sets: Vec<(String, toml::Value)>,
+    },
+}
+
+/// Runs a parsed command line.
+pub fn run(cli: Cli) -> Result<(), Failure> {
+    match cli.command {
+        Command::Element { material, test, p0, ocr, axial_strain, p_end, p_unload, steps, precision, out } => {
+            element::run(element::Args {
+                material,
+                test,
+                p0,
+                ocr,
+                axial_strain,
+                p_end,
+                p_unload,
+                steps,
+                precision,
+                out,
+            })
+        }
+        Command::Check { scene, sets } => check::run(&scene, &sets),
+    }
+}

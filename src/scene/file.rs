@@ -1,0 +1,122 @@
+//! The scene file as written: serde structures with `deny_unknown_fields`. Everything is
+//! optional at parse time so that a missing key gets a message saying what is allowed.
+
+use regolith_fsi::rheology::MaterialParams;
+use serde::Deserialize;
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneFile {
+    pub simulation: Option<SimulationFile>,
+    pub sph: Option<SphFile>,
+    #[serde(default)]
+    pub materials: Vec<MaterialParams>,
+    pub container: Option<ContainerFile>,
+    pub terrain: Option<TerrainFile>,
+    #[serde(default)]
+    pub soil_blocks: Vec<SoilBlockFile>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SimulationFile {
+    pub end_time: Option<f64>,
+    pub dt: Option<toml::Value>,
+    pub cfl: Option<f64>,
+    pub max_dt: Option<f64>,
+    pub integrator: Option<IntegratorName>,
+    pub gravity: Option<[f64; 3]>,
+    pub backend: Option<BackendName>,
+    pub precision: Option<PrecisionName>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum IntegratorName {
+    Rk2,
+    Euler,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum BackendName {
+    Auto,
+    Cpu,
+    Wgpu,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum PrecisionName {
+    F32,
+    F64,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SphFile {
+    pub spacing: Option<f64>,
+    pub h_factor: Option<f64>,
+    pub kernel: Option<KernelName>,
+    pub artificial_viscosity: Option<f64>,
+    pub shifting: Option<ShiftingName>,
+    pub xsph_epsilon: Option<f64>,
+    pub shifting_coefficient: Option<f64>,
+    pub free_surface: Option<bool>,
+    pub free_surface_threshold: Option<f64>,
+    pub bce_layers: Option<i64>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum KernelName {
+    Wendland,
+    Cubic,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+pub(crate) enum ShiftingName {
+    #[serde(rename = "none")]
+    None,
+    #[serde(rename = "xsph")]
+    Xsph,
+    #[serde(rename = "ppst")]
+    Ppst,
+    #[serde(rename = "ppst+xsph")]
+    PpstXsph,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ContainerFile {
+    pub min: Option<[f64; 3]>,
+    pub max: Option<[f64; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct TerrainFile {
+    pub material: Option<String>,
+    pub depth: Option<f64>,
+    pub heightmap: Option<String>,
+    pub heightmap_range: Option<[f64; 2]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SoilBlockFile {
+    pub material: Option<String>,
+    pub shape: Option<BlockShapeName>,
+    pub min: Option<[f64; 3]>,
+    pub max: Option<[f64; 3]>,
+    pub base_center: Option<[f64; 3]>,
+    pub radius: Option<f64>,
+    pub height: Option<f64>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum BlockShapeName {
+    Box,
+    Cylinder,
+}

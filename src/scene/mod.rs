@@ -1,0 +1,515 @@
+//! Scene files: what to simulate, as TOML. `load_scene` parses (with `--set` overrides),
+//! validates every key against its allowed range and resolves the scene into solver settings,
+//! materials and soil regions. Errors are one line naming the file, the key and what is allowed.
+//!
+//! ```toml
+//! [simulation]
+//! end_time = 1.0            # s
+//! dt = "auto"               # or a fixed step in s
+//! integrator = "rk2"        # or "euler"
+//! gravity = [0.0, 0.0, -9.81]
+//! backend = "cpu"           # "auto" | "cpu" | "wgpu"
+//! precision = "f64"         # or "f32"
+//!
+//! [sph]
+//! spacing = 0.02            # m
+//! h_factor = 1.2
+//! kernel = "wendland"       # or "cubic"
+//! artificial_viscosity = 0.5
+//! shifting = "xsph"         # "none" | "xsph" | "ppst" | "ppst+xsph"
+//!
+//! [[materials]]
+//! name = "sand"
+//! model = "drucker-prager"
+//! density = 1600.0
+//! youngs_modulus = 2e7
+//! poisson_ratio = 0.3
+//! friction_angle = 32.0
+//!
+//! [container]
+//! min = [0.0, 0.0, 0.0]
+//! max = [1.0, 0.5, 0.6]
+//!
+//! [terrain]
+//! material = "sand"
+//! depth = 0.3
+//! ```
+
+mod file;
+mod overrides;
+mod plan;
+
+use std::path::{Path, PathBuf};
+
+use regolith_fsi::config::{Integrator, KernelKind, Shifting, SolverConfig, TimeStep};
+use regolith_fsi::rheology::{MaterialParams, Rheology};
+use regolith_terrain::{Aabb, Heightmap, SoilRegion, Surface};
+
+pub use overrides::parse_set;
+pub use plan::describe;
+
+use crate::input::{InputError, parse_toml, read_text};
+use crate::material::{build_material, load_material_file};
+use file::{BackendName, BlockShapeName, IntegratorName, KernelName, PrecisionName, SceneFile, ShiftingName};
+
+/// Which compute backend runs the soil.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// A GPU through wgpu when one exists, else the CPU.
+    Auto,
+    /// Rayon on the CPU (the reference).
+    Cpu,
+    /// WGSL compute through wgpu.
+    Wgpu,
+}
+
+impl Backend {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Cpu => "cpu",
+            Self::Wgpu => "wgpu",
+        }
+    }
+}
+
+/// Floating-point precision of the soil solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// Single.
+    F32,
+    /// Double.
+    F64,
+}
+
+impl Precision {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::F32 => "f32",
+            Self::F64 => "f64",
+        }
+    }
+}
+
+/// A named, validated material of a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneMaterial {
+    /// Name used by terrain and soil blocks.
+    pub name: String,
+    /// Checked parameters (from the scene or from the file it names).
+    pub params: MaterialParams,
+}
+
+/// Soil of one material in one region.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SoilSpec {
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Where.
+    pub region: SoilRegion,
+    /// The key it came from (`terrain`, `soil_blocks[2]`), for messages.
+    pub key: String,
+}
+
+/// A validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The file it came from.
+    pub path: PathBuf,
+    /// Simulated time to run (s).
+    pub end_time: f64,
+    /// Backend.
+    pub backend: Backend,
+    /// Precision.
+    pub precision: Precision,
+    /// Solver settings.
+    pub solver: SolverConfig,
+    /// Materials, by index.
+    pub materials: Vec<SceneMaterial>,
+    /// Fixed walls on the bottom and four sides (open top).
+    pub container: Option<Aabb>,
+    /// Soil regions.
+    pub soil: Vec<SoilSpec>,
+}
+
+fn key_err(path: &Path, source: &str, key: impl Into<String>, message: impl Into<String>) -> InputError {
+    InputError::key(path, key, message).located(source)
+}
+
+/// Reads, overrides (`--set key=value`, applied in order) and validates a scene file.
+pub fn load_scene(path: &Path, sets: &[(String, toml::Value)]) -> Result<Scene, InputError> {
+    let source = read_text(path)?;
+    // Parse the file as written first, so that errors carry the file's own line numbers.
+    let mut file: SceneFile = parse_toml(path, &source)?;
+    if !sets.is_empty() {
+        let mut table: toml::Table = parse_toml(path, &source)?;
+        for (key, value) in sets {
+            overrides::apply(&mut table, key, value.clone())
+                .map_err(|m| InputError::flag("--set", format!("{key}: {m}")))?;
+        }
+        let text = toml::to_string(&table).map_err(|e| InputError::flag("--set", e.to_string()))?;
+        file = parse_toml::<SceneFile>(path, &text).map_err(|mut e| {
+            e.line = None;
+            e.message = format!("{} (after --set overrides)", e.message);
+            e
+        })?;
+    }
+    resolve(path, &source, file).map_err(|mut err| {
+        // A value that came from --set is reported as such, not at the file's line.
+        if let Some(k) = &err.key
+            && sets.iter().any(|(s, _)| s == k)
+        {
+            err.line = None;
+            err.message = format!("{} (value from --set)", err.message);
+        }
+        err
+    })
+}
+
+fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputError> {
+    let e = |key: &str, msg: String| key_err(path, source, key, msg);
+    let dir = path.parent().unwrap_or(Path::new("."));
+
+    let sim = file
+        .simulation
+        .ok_or_else(|| e("simulation", "section [simulation] is required (at least end_time)".into()))?;
+    let end_time =
+        sim.end_time.ok_or_else(|| e("simulation.end_time", "is required: simulated time in s, > 0".into()))?;
+    if !(end_time.is_finite() && end_time > 0.0) {
+        return Err(e("simulation.end_time", format!("must be > 0 s (got {end_time})")));
+    }
+    let cfl = sim.cfl.unwrap_or(0.3);
+    if !(cfl.is_finite() && cfl > 0.0 && cfl <= 1.0) {
+        return Err(e("simulation.cfl", format!("must be in (0, 1] (got {cfl})")));
+    }
+    let max_dt = sim.max_dt.unwrap_or(1e-3);
+    if !(max_dt.is_finite() && max_dt > 0.0) {
+        return Err(e("simulation.max_dt", format!("must be > 0 s (got {max_dt})")));
+    }
+    let time_step = match &sim.dt {
+        None => TimeStep::Adaptive { cfl, max: max_dt },
+        Some(toml::Value::String(s)) if s == "auto" => TimeStep::Adaptive { cfl, max: max_dt },
+        Some(v) => {
+            let dt = v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+            match dt {
+                Some(dt) if dt.is_finite() && dt > 0.0 && dt <= end_time => {
+                    if sim.cfl.is_some() || sim.max_dt.is_some() {
+                        return Err(e(
+                            "simulation.cfl",
+                            "and max_dt apply to dt = \"auto\" only; remove them or set dt = \"auto\"".into(),
+                        ));
+                    }
+                    TimeStep::Fixed(dt)
+                }
+                _ => {
+                    return Err(e(
+                        "simulation.dt",
+                        format!("must be \"auto\" or a step in s in (0, end_time = {end_time}] (got {v})"),
+                    ));
+                }
+            }
+        }
+    };
+    let integrator = match sim.integrator.unwrap_or(IntegratorName::Rk2) {
+        IntegratorName::Rk2 => Integrator::Rk2,
+        IntegratorName::Euler => Integrator::Euler,
+    };
+    let gravity = sim.gravity.unwrap_or([0.0, 0.0, -9.81]);
+    if gravity.iter().any(|g| !g.is_finite()) {
+        return Err(e("simulation.gravity", format!("must be three finite numbers in m/s² (got {gravity:?})")));
+    }
+    let backend = match sim.backend.unwrap_or(BackendName::Cpu) {
+        BackendName::Auto => Backend::Auto,
+        BackendName::Cpu => Backend::Cpu,
+        BackendName::Wgpu => Backend::Wgpu,
+    };
+    let precision = match sim.precision.unwrap_or(PrecisionName::F64) {
+        PrecisionName::F32 => Precision::F32,
+        PrecisionName::F64 => Precision::F64,
+    };
+
+    let sph = file.sph.ok_or_else(|| e("sph", "section [sph] is required (at least spacing)".into()))?;
+    let spacing =
+        sph.spacing.ok_or_else(|| e("sph.spacing", "is required: initial particle spacing in m, > 0".into()))?;
+    if !(spacing.is_finite() && spacing > 0.0) {
+        return Err(e("sph.spacing", format!("must be > 0 m (got {spacing})")));
+    }
+    let h_factor = sph.h_factor.unwrap_or(1.2);
+    if !(h_factor.is_finite() && (1.0..=2.0).contains(&h_factor)) {
+        return Err(e("sph.h_factor", format!("must be in [1.0, 2.0] (h/d0; got {h_factor})")));
+    }
+    let alpha = sph.artificial_viscosity.unwrap_or(0.5);
+    if !(alpha.is_finite() && (0.0..=5.0).contains(&alpha)) {
+        return Err(e("sph.artificial_viscosity", format!("must be in [0, 5] (got {alpha})")));
+    }
+    let shifting = match sph.shifting.unwrap_or(ShiftingName::Xsph) {
+        ShiftingName::None => Shifting::None,
+        ShiftingName::Xsph => Shifting::Xsph,
+        ShiftingName::Ppst => Shifting::Ppst,
+        ShiftingName::PpstXsph => Shifting::PpstXsph,
+    };
+    let xsph_epsilon = sph.xsph_epsilon.unwrap_or(0.25);
+    if !(xsph_epsilon.is_finite() && (0.0..=1.0).contains(&xsph_epsilon)) {
+        return Err(e("sph.xsph_epsilon", format!("must be in [0, 1] (got {xsph_epsilon})")));
+    }
+    if sph.xsph_epsilon.is_some() && !shifting.xsph() {
+        return Err(e("sph.xsph_epsilon", "applies only when shifting includes \"xsph\"".into()));
+    }
+    let shifting_coefficient = sph.shifting_coefficient.unwrap_or(0.1);
+    if !(shifting_coefficient.is_finite() && (0.0..=1.0).contains(&shifting_coefficient)) {
+        return Err(e("sph.shifting_coefficient", format!("must be in [0, 1] (got {shifting_coefficient})")));
+    }
+    if sph.shifting_coefficient.is_some() && !shifting.ppst() {
+        return Err(e("sph.shifting_coefficient", "applies only when shifting includes \"ppst\"".into()));
+    }
+    let free_surface = sph.free_surface.unwrap_or(true);
+    let threshold = sph.free_surface_threshold.unwrap_or(crate::DEFAULT_FREE_SURFACE_THRESHOLD);
+    if !(threshold.is_finite() && threshold > 0.0 && threshold < 3.0) {
+        return Err(e(
+            "sph.free_surface_threshold",
+            format!("must be in (0, 3): Σ(m/ρ)(−r·∇W) is 3 inside the soil (got {threshold})"),
+        ));
+    }
+    if !free_surface && sph.free_surface_threshold.is_some() {
+        return Err(e("sph.free_surface_threshold", "is set but free_surface = false".into()));
+    }
+    let bce_layers = sph.bce_layers.unwrap_or(3);
+    if !(1..=8).contains(&bce_layers) {
+        return Err(e("sph.bce_layers", format!("must be an integer in 1..=8 (got {bce_layers})")));
+    }
+    let kernel = match sph.kernel.unwrap_or(KernelName::Wendland) {
+        KernelName::Wendland => KernelKind::Wendland,
+        KernelName::Cubic => KernelKind::Cubic,
+    };
+    let solver = SolverConfig {
+        spacing,
+        h_factor,
+        kernel,
+        integrator,
+        time_step,
+        artificial_viscosity: alpha,
+        shifting,
+        xsph_epsilon,
+        shifting_coefficient,
+        free_surface_threshold: free_surface.then_some(threshold),
+        gravity,
+        bce_layers: bce_layers as usize,
+    };
+
+    // Materials: inline, or from a file named relative to the scene.
+    let mut materials = Vec::new();
+    for (i, m) in file.materials.iter().enumerate() {
+        let prefix = format!("materials[{i}].");
+        let name = m.name.clone().ok_or_else(|| {
+            e(&format!("materials[{i}].name"), "is required: the name terrain and soil blocks refer to".into())
+        })?;
+        if name.trim().is_empty() {
+            return Err(e(&format!("materials[{i}].name"), "must not be empty".into()));
+        }
+        if materials.iter().any(|x: &SceneMaterial| x.name == name) {
+            return Err(e(
+                &format!("materials[{i}].name"),
+                format!("\"{name}\" is defined twice; material names must be unique"),
+            ));
+        }
+        let params = if let Some(f) = &m.file {
+            let only_name = MaterialParams { name: m.name.clone(), file: m.file.clone(), ..Default::default() };
+            if *m != only_name {
+                return Err(e(
+                    &format!("materials[{i}].file"),
+                    "a material read from a file takes only `name` and `file` here; put the other keys in the file"
+                        .into(),
+                ));
+            }
+            let p = dir.join(f);
+            let mut params = load_material_file(&p)?;
+            params.name = Some(name.clone());
+            params
+        } else {
+            build_material::<f64>(m, path, &prefix, source)?;
+            m.clone()
+        };
+        materials.push(SceneMaterial { name, params });
+    }
+    let find_material = |key: &str, name: &Option<String>| -> Result<usize, InputError> {
+        let n = name.as_ref().ok_or_else(|| e(key, "is required: the name of a [[materials]] entry".into()))?;
+        materials.iter().position(|m| &m.name == n).ok_or_else(|| {
+            let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+            e(
+                key,
+                format!(
+                    "\"{n}\" is not a defined material (defined: {})",
+                    if known.is_empty() { "none".into() } else { known.join(", ") }
+                ),
+            )
+        })
+    };
+
+    let container = match &file.container {
+        None => None,
+        Some(c) => {
+            let min = c.min.ok_or_else(|| e("container.min", "is required: lower corner [x, y, z] in m".into()))?;
+            let max = c.max.ok_or_else(|| e("container.max", "is required: upper corner [x, y, z] in m".into()))?;
+            if min.iter().chain(&max).any(|v| !v.is_finite()) {
+                return Err(e("container.max", "corners must be finite".into()));
+            }
+            for k in 0..3 {
+                if max[k] - min[k] < 4.0 * spacing {
+                    return Err(e(
+                        "container.max",
+                        format!(
+                            "must exceed container.min by at least 4 × sph.spacing = {} m along each axis (axis {} spans {} m)",
+                            4.0 * spacing,
+                            ["x", "y", "z"][k],
+                            max[k] - min[k]
+                        ),
+                    ));
+                }
+            }
+            Some(Aabb { min, max })
+        }
+    };
+
+    let mut soil = Vec::new();
+    if let Some(t) = &file.terrain {
+        let material = find_material("terrain.material", &t.material)?;
+        let c =
+            container.ok_or_else(|| e("terrain", "needs a [container]: the bed fills the container floor".into()))?;
+        let height = c.size()[2];
+        let surface = match (t.depth, &t.heightmap) {
+            (Some(_), Some(_)) => {
+                return Err(e("terrain.depth", "and terrain.heightmap are both given: give one".into()));
+            }
+            (None, None) => {
+                return Err(e("terrain.depth", "is required (or terrain.heightmap): bed depth in m".into()));
+            }
+            (Some(d), None) => {
+                if t.heightmap_range.is_some() {
+                    return Err(e("terrain.heightmap_range", "applies only with terrain.heightmap".into()));
+                }
+                if !(d.is_finite() && d >= 2.0 * spacing && d <= height) {
+                    return Err(e(
+                        "terrain.depth",
+                        format!(
+                            "must be in [2 × sph.spacing = {}, container height = {height}] m (got {d})",
+                            2.0 * spacing
+                        ),
+                    ));
+                }
+                Surface::Flat(d)
+            }
+            (None, Some(hm)) => {
+                let range = t.heightmap_range.map(|r| (r[0], r[1]));
+                let map = Heightmap::load(&dir.join(hm), range)
+                    .map_err(|err| InputError::key(path, "terrain.heightmap", err.to_string()).located(source))?;
+                if map.max_height() > height {
+                    return Err(e(
+                        "terrain.heightmap",
+                        format!("heights reach {} m, above the container height {height} m", map.max_height()),
+                    ));
+                }
+                Surface::Heightmap(map)
+            }
+        };
+        soil.push(SoilSpec { material, region: SoilRegion::Bed { container: c, surface }, key: "terrain".into() });
+    }
+    for (i, b) in file.soil_blocks.iter().enumerate() {
+        let k = |s: &str| format!("soil_blocks[{i}].{s}");
+        let material = find_material(&k("material"), &b.material)?;
+        let shape = b.shape.ok_or_else(|| e(&k("shape"), "is required: \"box\" or \"cylinder\"".into()))?;
+        let region = match shape {
+            BlockShapeName::Box => {
+                for (name, present) in [
+                    ("base_center", b.base_center.is_some()),
+                    ("radius", b.radius.is_some()),
+                    ("height", b.height.is_some()),
+                ] {
+                    if present {
+                        return Err(e(
+                            &k(name),
+                            "applies to shape = \"cylinder\" only; a box takes min and max".into(),
+                        ));
+                    }
+                }
+                let min =
+                    b.min.ok_or_else(|| e(&k("min"), "is required for a box: lower corner [x, y, z] in m".into()))?;
+                let max =
+                    b.max.ok_or_else(|| e(&k("max"), "is required for a box: upper corner [x, y, z] in m".into()))?;
+                if (0..3).any(|a| !min[a].is_finite() || !max[a].is_finite() || max[a] - min[a] < spacing) {
+                    return Err(e(
+                        &k("max"),
+                        format!("must exceed min by at least sph.spacing = {spacing} m along each axis"),
+                    ));
+                }
+                SoilRegion::Block(Aabb { min, max })
+            }
+            BlockShapeName::Cylinder => {
+                for (name, present) in [("min", b.min.is_some()), ("max", b.max.is_some())] {
+                    if present {
+                        return Err(e(
+                            &k(name),
+                            "applies to shape = \"box\" only; a cylinder takes base_center, radius and height".into(),
+                        ));
+                    }
+                }
+                let base_center = b.base_center.ok_or_else(|| {
+                    e(&k("base_center"), "is required for a cylinder: [x, y, z] of the bottom face centre in m".into())
+                })?;
+                let radius = b.radius.ok_or_else(|| e(&k("radius"), "is required for a cylinder (m)".into()))?;
+                let height = b.height.ok_or_else(|| e(&k("height"), "is required for a cylinder (m)".into()))?;
+                if !(radius.is_finite() && radius >= spacing) {
+                    return Err(e(&k("radius"), format!("must be ≥ sph.spacing = {spacing} m (got {radius})")));
+                }
+                if !(height.is_finite() && height >= spacing) {
+                    return Err(e(&k("height"), format!("must be ≥ sph.spacing = {spacing} m (got {height})")));
+                }
+                SoilRegion::Cylinder { base_center, radius, height }
+            }
+        };
+        if let Some(c) = container {
+            let (lo, hi) = region_bounds(&region);
+            let eps = 1e-9 * spacing;
+            if (0..3).any(|a| lo[a] < c.min[a] - eps || hi[a] > c.max[a] + eps) {
+                return Err(e(
+                    &k("shape"),
+                    format!("the block [{lo:?} .. {hi:?}] must lie inside the container [{:?} .. {:?}]", c.min, c.max),
+                ));
+            }
+        } else {
+            return Err(e(&k("shape"), "soil blocks need a [container] to stand in (walls and floor)".into()));
+        }
+        soil.push(SoilSpec { material, region, key: format!("soil_blocks[{i}]") });
+    }
+    if soil.is_empty() {
+        return Err(InputError::file(path, "the scene has no soil: add [terrain] or [[soil_blocks]]"));
+    }
+    for (i, m) in materials.iter().enumerate() {
+        if !soil.iter().any(|s| s.material == i) {
+            return Err(e(
+                &format!("materials[{i}].name"),
+                format!("material \"{}\" is defined but not used by any soil", m.name),
+            ));
+        }
+    }
+    Ok(Scene { path: path.to_path_buf(), end_time, backend, precision, solver, materials, container, soil })
+}
+
+/// Bounding box of a soil region (m).
+pub fn region_bounds(r: &SoilRegion) -> ([f64; 3], [f64; 3]) {
+    match r {
+        SoilRegion::Bed { container, surface } => {
+            (container.min, [container.max[0], container.max[1], container.min[2] + surface.max_depth()])
+        }
+        SoilRegion::Block(b) => (b.min, b.max),
+        SoilRegion::Cylinder { base_center: c, radius, height } => {
+            ([c[0] - radius, c[1] - radius, c[2]], [c[0] + radius, c[1] + radius, c[2] + height])
+        }
+    }
+}
+
+/// The rheology of each material of a scene, in `f64` (for reporting).
+pub fn rheologies(scene: &Scene) -> Vec<Rheology<f64>> {
+    scene.materials.iter().filter_map(|m| m.params.build::<f64>().ok()).map(|m| m.rheology).collect()
+}

@@ -1,0 +1,155 @@
+//! What `regolith check` prints: the resolved scene.
+
+use std::fmt::Write;
+
+use regolith_fsi::config::{Integrator, KernelKind, Shifting, TimeStep};
+use regolith_fsi::rheology::Rheology;
+use regolith_terrain::{SoilRegion, Surface};
+
+use super::{Scene, region_bounds};
+
+fn volume(r: &SoilRegion) -> f64 {
+    match r {
+        SoilRegion::Bed { container, surface } => {
+            let s = container.size();
+            match surface {
+                Surface::Flat(d) => s[0] * s[1] * d,
+                Surface::Heightmap(h) => s[0] * s[1] * h.heights.iter().sum::<f64>() / h.heights.len() as f64,
+            }
+        }
+        SoilRegion::Block(b) => {
+            let s = b.size();
+            s[0] * s[1] * s[2]
+        }
+        SoilRegion::Cylinder { radius, height, .. } => std::f64::consts::PI * radius * radius * height,
+    }
+}
+
+/// A human-readable description of what the scene would run.
+pub fn describe(scene: &Scene) -> String {
+    let mut s = String::new();
+    let sv = &scene.solver;
+    let _ = writeln!(s, "scene {}", scene.path.display());
+    let _ = writeln!(
+        s,
+        "  run: {} s of simulated time on backend {} in {}",
+        scene.end_time,
+        scene.backend.name(),
+        scene.precision.name()
+    );
+    let integ = match sv.integrator {
+        Integrator::Rk2 => "explicit midpoint (rk2)",
+        Integrator::Euler => "explicit Euler",
+    };
+    let dt = match sv.time_step {
+        TimeStep::Fixed(dt) => format!("fixed dt = {dt} s"),
+        TimeStep::Adaptive { cfl, max } => format!("adaptive dt (CFL {cfl}, at most {max} s)"),
+    };
+    let _ = writeln!(s, "  time: {integ}, {dt}");
+    let kernel = match sv.kernel {
+        KernelKind::Wendland => "Wendland C2",
+        KernelKind::Cubic => "cubic spline",
+    };
+    let _ = writeln!(
+        s,
+        "  sph: d0 = {} m, h = {:.4} m (h/d0 = {}), {kernel} kernel, artificial viscosity α = {}",
+        sv.spacing,
+        sv.h(),
+        sv.h_factor,
+        sv.artificial_viscosity
+    );
+    let mut min_dt = f64::INFINITY;
+    for m in &scene.materials {
+        let Ok(mat) = m.params.build::<f64>() else { continue };
+        let detail = match &mat.rheology {
+            Rheology::Elastic => String::new(),
+            Rheology::DruckerPrager(dp) => format!(
+                ", φ = {}°, c = {} Pa{}",
+                mat.friction_angle_deg,
+                mat.cohesion,
+                if dp.has_mu_i() { " with μ(I)" } else { "" }
+            ),
+            Rheology::Mcc(mcc) => format!(
+                ", M = {}, κ = {}, λ = {}, v_λ = {}, OCR = {}, clamp {}, p_c floor {} Pa",
+                mcc.m,
+                mcc.kappa,
+                mcc.lambda,
+                mcc.v_lambda,
+                mat.ocr,
+                if mcc.safeguards.moduli_clamp.is_some() { "on" } else { "off" },
+                mcc.safeguards.pc_floor
+            ),
+        };
+        let c = mat.wave_speed();
+        min_dt = min_dt.min(sv.h() / c);
+        let _ = writeln!(
+            s,
+            "  material \"{}\": {}, ρ = {} kg/m³, E = {} Pa, ν = {}{detail}; wave speed {:.1} m/s",
+            m.name,
+            mat.rheology.name(),
+            mat.density,
+            m.params.youngs_modulus.unwrap_or(f64::NAN),
+            mat.poisson,
+            c
+        );
+    }
+    let d3 = sv.spacing.powi(3);
+    let mut total = 0.0;
+    for spec in &scene.soil {
+        let n = volume(&spec.region) / d3;
+        total += n;
+        let (lo, hi) = region_bounds(&spec.region);
+        let _ = writeln!(
+            s,
+            "  soil {}: \"{}\" in [{:?} .. {:?}], about {:.0} particles",
+            spec.key, scene.materials[spec.material].name, lo, hi, n
+        );
+    }
+    let mut walls = 0.0;
+    if let Some(c) = scene.container {
+        let sz = c.size();
+        let area = sz[0] * sz[1] + 2.0 * sz[2] * (sz[0] + sz[1]);
+        walls = area / sv.spacing.powi(2) * sv.bce_layers as f64;
+        let _ = writeln!(
+            s,
+            "  container [{:?} .. {:?}]: floor and four walls, {} BCE layers, about {:.0} markers",
+            c.min, c.max, sv.bce_layers, walls
+        );
+    }
+    let dt_est = match sv.time_step {
+        TimeStep::Fixed(dt) => dt,
+        TimeStep::Adaptive { cfl, max } => (cfl * min_dt).min(max),
+    };
+    let steps = (scene.end_time / dt_est).ceil();
+    // Per particle: SoA state (position, velocity, density, stress, pc, v, material) twice for
+    // the RK2 stage, rates, the cell sort, and a neighbour list of about 60 entries (4 B each).
+    let bytes_per = if scene.precision.name() == "f32" { 4.0 } else { 8.0 };
+    let mem = (total + walls) * (bytes_per * 2.0 * 22.0 + 60.0 * 4.0 + 16.0) / (1024.0 * 1024.0);
+    let _ = writeln!(
+        s,
+        "  size: about {:.0} soil particles + {:.0} wall markers, about {:.0} MiB; dt ≈ {:.2e} s, about {:.0} steps",
+        total, walls, mem, dt_est, steps
+    );
+    let mut models: Vec<&str> = scene.materials.iter().filter_map(|m| m.params.model).map(|k| k.name()).collect();
+    models.sort_unstable();
+    models.dedup();
+    let shifting = match sv.shifting {
+        Shifting::None => "none",
+        Shifting::Xsph => "xsph",
+        Shifting::Ppst => "ppst",
+        Shifting::PpstXsph => "ppst+xsph",
+    };
+    let hardening = models.contains(&"mcc");
+    let _ = writeln!(
+        s,
+        "  effects: rheology {{{}}}, hardening {}, free surface {}, shifting {shifting}, artificial viscosity {}, bodies 0",
+        models.join(", "),
+        if hardening { "on" } else { "off" },
+        match sv.free_surface_threshold {
+            Some(t) => format!("on (threshold {t})"),
+            None => "off".into(),
+        },
+        if sv.artificial_viscosity > 0.0 { "on" } else { "off" }
+    );
+    s
+}

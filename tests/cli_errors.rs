@@ -1,0 +1,138 @@
+//! The command-line tool answers wrong input with one line and exit code 2, never a panic.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn regolith(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_regolith")).args(args).output().expect("run regolith");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn material(name: &str, text: &str) -> String {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_errors");
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let p = dir.join(name);
+    std::fs::write(&p, text).expect("write");
+    p.display().to_string()
+}
+
+fn assert_one_line_error(args: &[&str], contains: &str) {
+    let (code, _out, err) = regolith(args);
+    assert_eq!(code, 2, "exit code for {args:?}: stderr {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "not one line: {err}");
+    assert!(err.contains(contains), "{err} does not contain {contains}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+const CLAY: &str = "examples/materials/clay_mcc.toml";
+
+#[test]
+fn element_flag_errors_are_one_line() {
+    assert_one_line_error(
+        &["element", "--material", CLAY, "--test", "isotropic", "--p0", "-5", "--p-end", "1e5"],
+        "--p0: must be > 0 Pa (got -5)",
+    );
+    assert_one_line_error(
+        &["element", "--material", CLAY, "--test", "isotropic", "--p0", "5e4"],
+        "--p-end: is required for a isotropic test",
+    );
+    assert_one_line_error(
+        &["element", "--material", CLAY, "--test", "isotropic", "--p0", "5e4", "--axial-strain", "0.1"],
+        "--axial-strain: does not apply to an isotropic test",
+    );
+    assert_one_line_error(
+        &["element", "--material", CLAY, "--test", "drained-triaxial", "--p0", "5e4", "--axial-strain", "7"],
+        "--axial-strain: must be in (0, 5]",
+    );
+    assert_one_line_error(
+        &["element", "--material", CLAY, "--test", "isotropic", "--p0", "5e4", "--p-end", "1e5", "--p-unload", "2e5"],
+        "--p-unload: must be in (0, --p-end = 100000) Pa (got 200000)",
+    );
+    assert_one_line_error(
+        &["element", "--material", CLAY, "--test", "shear", "--p0", "5e4"],
+        "invalid value 'shear' for '--test <TEST>'",
+    );
+    assert_one_line_error(
+        &["element", "--material", CLAY, "--test", "isotropic", "--p0", "abc"],
+        "invalid value 'abc' for '--p0 <PA>'",
+    );
+    assert_one_line_error(
+        &["element", "--material", CLAY, "--test", "oedometer", "--p0", "5e4", "--ocr", "0.5", "--axial-strain", "0.1"],
+        "--ocr: must be ≥ 1 (got 0.5)",
+    );
+    let dp = "examples/materials/sand_dp.toml";
+    assert_one_line_error(
+        &[
+            "element",
+            "--material",
+            dp,
+            "--test",
+            "drained-triaxial",
+            "--p0",
+            "5e4",
+            "--ocr",
+            "2",
+            "--axial-strain",
+            "0.1",
+        ],
+        "--ocr: applies to model \"mcc\" only",
+    );
+    assert_one_line_error(
+        &["element", "--material", "nope.toml", "--test", "isotropic", "--p0", "5e4", "--p-end", "1e5"],
+        "nope.toml: cannot read:",
+    );
+}
+
+#[test]
+fn material_errors_reach_the_cli_as_one_line() {
+    let m = material(
+        "swapped.toml",
+        "model = \"mcc\"\ndensity = 1700.0\nyoungs_modulus = 2e7\npoisson_ratio = 0.3\nmcc_m = 1.2\nmcc_kappa = 0.1\nmcc_lambda = 0.02\nmcc_v_lambda = 2.2\n",
+    );
+    assert_one_line_error(
+        &["element", "--material", &m, "--test", "isotropic", "--p0", "5e4", "--p-end", "1e5"],
+        ":7: key `mcc_lambda`: λ = 0.02 is smaller than κ = 0.1: they look swapped.",
+    );
+}
+
+#[test]
+fn element_writes_json_and_plots() {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_element_out");
+    let _ = std::fs::remove_dir_all(&out);
+    let o = out.display().to_string();
+    let (code, stdout, err) = regolith(&[
+        "element",
+        "--material",
+        CLAY,
+        "--test",
+        "undrained-triaxial",
+        "--p0",
+        "1e5",
+        "--axial-strain",
+        "0.5",
+        "--out",
+        &o,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("critical state (closed form)"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("element.json")).expect("json")).expect("valid json");
+    for k in ["p", "q", "pc", "v", "eps_axial", "eps_vol"] {
+        let arr = json[k].as_array().unwrap_or_else(|| panic!("array {k}"));
+        assert_eq!(arr.len(), 2001, "{k}");
+    }
+    for k in ["p", "q", "pc", "v", "eps_axial", "eps_vol"] {
+        assert!(json["final"][k].is_number(), "final.{k}");
+    }
+    for f in ["element.png", "element.svg"] {
+        let len = std::fs::metadata(out.join(f)).expect(f).len();
+        assert!(len > 10_000, "{f} is only {len} bytes");
+    }
+    // The PNG decodes as an image with the expected size.
+    let png = std::fs::read(out.join("element.png")).expect("png");
+    assert_eq!(&png[1..4], b"PNG");
+}

@@ -1,0 +1,298 @@
+//! Scene validation: every example scene is valid, and each kind of mistake gets the exact
+//! one-line error naming the file, line, key and what is allowed.
+
+use std::path::PathBuf;
+
+use regolith::scene::{load_scene, parse_set};
+
+const BASE: &str = r#"[simulation]
+end_time = 0.5
+dt = "auto"
+
+[sph]
+spacing = 0.02
+
+[[materials]]
+name = "sand"
+model = "drucker-prager"
+density = 1600
+youngs_modulus = 2e7
+poisson_ratio = 0.3
+friction_angle = 30.0
+
+[container]
+min = [0.0, 0.0, 0.0]
+max = [0.4, 0.4, 0.5]
+
+[terrain]
+material = "sand"
+depth = 0.2
+"#;
+
+fn write(name: &str, text: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scene_errors");
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(&p, text).expect("write");
+    p
+}
+
+fn err(name: &str, text: &str) -> (PathBuf, String) {
+    let p = write(name, text);
+    let e = load_scene(&p, &[]).expect_err("must be rejected").to_string();
+    (p, e)
+}
+
+macro_rules! case {
+    ($name:ident, $from:expr, $to:expr, $expected:expr) => {
+        #[test]
+        fn $name() {
+            assert!(BASE.contains($from), "bad test: {:?} not in BASE", $from);
+            let (p, e) = err(stringify!($name), &BASE.replacen($from, $to, 1));
+            assert_eq!(e, format!($expected, p.display()));
+        }
+    };
+}
+
+#[test]
+fn base_scene_is_valid() {
+    let s = load_scene(&write("base", BASE), &[]).expect("valid");
+    assert_eq!(s.soil.len(), 1);
+    assert_eq!(s.solver.h_factor, 1.2);
+}
+
+#[test]
+fn every_example_scene_is_valid() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/scenes");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).expect("examples/scenes") {
+        let p = entry.expect("entry").path();
+        if p.extension().and_then(|e| e.to_str()) == Some("toml") {
+            load_scene(&p, &[]).unwrap_or_else(|e| panic!("{e}"));
+            n += 1;
+        }
+    }
+    assert!(n >= 1);
+}
+
+case!(
+    no_simulation,
+    "[simulation]\nend_time = 0.5\ndt = \"auto\"\n",
+    "",
+    "{}: key `simulation`: section [simulation] is required (at least end_time)"
+);
+case!(
+    end_time_negative,
+    "end_time = 0.5",
+    "end_time = -1.0",
+    "{}:2: key `simulation.end_time`: must be > 0 s (got -1)"
+);
+case!(
+    dt_word,
+    "dt = \"auto\"",
+    "dt = \"fast\"",
+    "{}:3: key `simulation.dt`: must be \"auto\" or a step in s in (0, end_time = 0.5] (got \"fast\")"
+);
+case!(
+    cfl_with_fixed_dt,
+    "dt = \"auto\"",
+    "dt = 1e-4\ncfl = 0.2",
+    "{}:4: key `simulation.cfl`: and max_dt apply to dt = \"auto\" only; remove them or set dt = \"auto\""
+);
+case!(cfl_range, "dt = \"auto\"", "cfl = 1.5", "{}:3: key `simulation.cfl`: must be in (0, 1] (got 1.5)");
+case!(
+    unknown_integrator,
+    "dt = \"auto\"",
+    "integrator = \"rk4\"",
+    "{}:3: key `simulation.integrator`: unknown variant `rk4`, expected `rk2` or `euler`"
+);
+case!(
+    unknown_section,
+    "[sph]",
+    "[fluid]\nx = 1\n[sph]",
+    "{}:5: key `fluid`: unknown field `fluid`, expected one of `simulation`, `sph`, `materials`, `container`, `terrain`, `soil_blocks` (unknown keys are errors so that nothing is silently ignored)"
+);
+case!(
+    spacing_missing,
+    "spacing = 0.02",
+    "h_factor = 1.2",
+    "{}:5: key `sph.spacing`: is required: initial particle spacing in m, > 0"
+);
+case!(
+    h_factor_range,
+    "spacing = 0.02",
+    "spacing = 0.02\nh_factor = 3.0",
+    "{}:7: key `sph.h_factor`: must be in [1.0, 2.0] (h/d0; got 3)"
+);
+case!(
+    bce_layers_zero,
+    "spacing = 0.02",
+    "spacing = 0.02\nbce_layers = 0",
+    "{}:7: key `sph.bce_layers`: must be an integer in 1..=8 (got 0)"
+);
+case!(
+    threshold_range,
+    "spacing = 0.02",
+    "spacing = 0.02\nfree_surface_threshold = 3.5",
+    "{}:7: key `sph.free_surface_threshold`: must be in (0, 3): Σ(m/ρ)(−r·∇W) is 3 inside the soil (got 3.5)"
+);
+case!(
+    shifting_unknown,
+    "spacing = 0.02",
+    "spacing = 0.02\nshifting = \"ppsts\"",
+    "{}:7: key `sph.shifting`: unknown variant `ppsts`, expected one of `none`, `xsph`, `ppst`, `ppst+xsph`"
+);
+case!(
+    xsph_epsilon_without_xsph,
+    "spacing = 0.02",
+    "spacing = 0.02\nshifting = \"ppst\"\nxsph_epsilon = 0.3",
+    "{}:8: key `sph.xsph_epsilon`: applies only when shifting includes \"xsph\""
+);
+case!(
+    material_without_name,
+    "name = \"sand\"\n",
+    "",
+    "{}:8: key `materials[0].name`: is required: the name terrain and soil blocks refer to"
+);
+case!(
+    material_rule_in_scene,
+    "poisson_ratio = 0.3",
+    "poisson_ratio = 0.6",
+    "{}:13: key `materials[0].poisson_ratio`: must satisfy 0 < ν < 0.5 (got 0.6)"
+);
+case!(
+    material_unknown_key,
+    "poisson_ratio = 0.3",
+    "poisson = 0.3",
+    "{}:13: key `materials[0].poisson`: unknown field `poisson`, expected one of `name`, `file`, `model`, `density`, `youngs_modulus`, `poisson_ratio`, `friction_angle`, `cohesion`, `mu_i_friction_angle`, `mu_i_i0`, `grain_diameter`, `grain_density`, `mcc_m`, `mcc_kappa`, `mcc_lambda`, `mcc_cr`, `mcc_cc`, `mcc_v_lambda`, `ocr`, `mcc_clamp_moduli`, `mcc_pc_floor` (unknown keys are errors so that nothing is silently ignored)"
+);
+case!(
+    terrain_unknown_material,
+    "material = \"sand\"",
+    "material = \"gravel\"",
+    "{}:21: key `terrain.material`: \"gravel\" is not a defined material (defined: sand)"
+);
+case!(
+    container_inverted,
+    "max = [0.4, 0.4, 0.5]",
+    "max = [0.4, -0.4, 0.5]",
+    "{}:18: key `container.max`: must exceed container.min by at least 4 × sph.spacing = 0.08 m along each axis (axis y spans -0.4 m)"
+);
+case!(
+    terrain_too_deep,
+    "depth = 0.2",
+    "depth = 0.7",
+    "{}:22: key `terrain.depth`: must be in [2 × sph.spacing = 0.04, container height = 0.5] m (got 0.7)"
+);
+case!(
+    terrain_without_container,
+    "[container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.4, 0.4, 0.5]\n",
+    "",
+    "{}:17: key `terrain`: needs a [container]: the bed fills the container floor"
+);
+case!(
+    terrain_depth_and_heightmap,
+    "depth = 0.2",
+    "depth = 0.2\nheightmap = \"h.csv\"",
+    "{}:22: key `terrain.depth`: and terrain.heightmap are both given: give one"
+);
+#[test]
+fn heightmap_missing_file() {
+    let (p, e) = err("heightmap_missing_file", &BASE.replacen("depth = 0.2", "heightmap = \"no-such-map.csv\"", 1));
+    let map = p.parent().expect("dir").join("no-such-map.csv");
+    assert_eq!(
+        e,
+        format!(
+            "{}:22: key `terrain.heightmap`: {}: cannot read: No such file or directory (os error 2)",
+            p.display(),
+            map.display()
+        )
+    );
+}
+case!(
+    no_soil,
+    "[terrain]\nmaterial = \"sand\"\ndepth = 0.2\n",
+    "",
+    "{}: the scene has no soil: add [terrain] or [[soil_blocks]]"
+);
+case!(
+    block_outside,
+    "[terrain]\nmaterial = \"sand\"\ndepth = 0.2\n",
+    "[[soil_blocks]]\nmaterial = \"sand\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.6, 0.2, 0.2]\n",
+    "{}:22: key `soil_blocks[0].shape`: the block [[0.0, 0.0, 0.0] .. [0.6, 0.2, 0.2]] must lie inside the container [[0.0, 0.0, 0.0] .. [0.4, 0.4, 0.5]]"
+);
+case!(
+    cylinder_without_radius,
+    "[terrain]\nmaterial = \"sand\"\ndepth = 0.2\n",
+    "[[soil_blocks]]\nmaterial = \"sand\"\nshape = \"cylinder\"\nbase_center = [0.2, 0.2, 0.0]\nheight = 0.1\n",
+    "{}:20: key `soil_blocks[0].radius`: is required for a cylinder (m)"
+);
+case!(
+    cylinder_with_box_keys,
+    "[terrain]\nmaterial = \"sand\"\ndepth = 0.2\n",
+    "[[soil_blocks]]\nmaterial = \"sand\"\nshape = \"cylinder\"\nmin = [0.0, 0.0, 0.0]\n",
+    "{}:23: key `soil_blocks[0].min`: applies to shape = \"box\" only; a cylinder takes base_center, radius and height"
+);
+case!(
+    unused_material,
+    "[container]",
+    "[[materials]]\nname = \"clay\"\nmodel = \"elastic\"\ndensity = 1800\nyoungs_modulus = 1e7\npoisson_ratio = 0.3\n\n[container]",
+    "{}:17: key `materials[1].name`: material \"clay\" is defined but not used by any soil"
+);
+case!(
+    duplicate_material,
+    "[container]",
+    "[[materials]]\nname = \"sand\"\nmodel = \"elastic\"\ndensity = 1800\nyoungs_modulus = 1e7\npoisson_ratio = 0.3\n\n[container]",
+    "{}:17: key `materials[1].name`: \"sand\" is defined twice; material names must be unique"
+);
+
+#[test]
+fn materials_can_come_from_files_relative_to_the_scene() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scene_errors");
+    std::fs::create_dir_all(&dir).expect("tmp");
+    std::fs::write(dir.join("soil.toml"), "model = \"drucker-prager\"\ndensity = 1500\nyoungs_modulus = 1e7\npoisson_ratio = 0.25\nfriction_angle = 35.0\n").expect("write");
+    let text = BASE.replacen("model = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 2e7\npoisson_ratio = 0.3\nfriction_angle = 30.0\n", "file = \"soil.toml\"\n", 1);
+    let s = load_scene(&write("from_file", &text), &[]).expect("valid");
+    assert_eq!(s.materials[0].params.density, Some(1500.0));
+    let mixed = text.replacen("file = \"soil.toml\"", "file = \"soil.toml\"\ndensity = 1700", 1);
+    let (p, e) = err("from_file_mixed", &mixed);
+    assert_eq!(
+        e,
+        format!(
+            "{}:10: key `materials[0].file`: a material read from a file takes only `name` and `file` here; put the other keys in the file",
+            p.display()
+        )
+    );
+}
+
+#[test]
+fn set_overrides_apply_and_report_their_origin() {
+    let p = write("set", BASE);
+    let s = load_scene(
+        &p,
+        &[parse_set("simulation.end_time=0.25").expect("set"), parse_set("materials[0].density=1700").expect("set")],
+    )
+    .expect("valid");
+    assert_eq!(s.end_time, 0.25);
+    assert_eq!(s.materials[0].params.density, Some(1700.0));
+    let e = load_scene(&p, &[parse_set("sph.spacing=-1").expect("set")]).expect_err("bad").to_string();
+    assert_eq!(e, format!("{}: key `sph.spacing`: must be > 0 m (got -1) (value from --set)", p.display()));
+    let e = load_scene(&p, &[parse_set("materials[4].density=1").expect("set")]).expect_err("bad").to_string();
+    assert_eq!(e, "--set: materials[4].density: `materials` has 1 entries; index 4 is out of range");
+}
+
+#[test]
+fn check_cli_exit_codes() {
+    let run =
+        |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_regolith")).args(args).output().expect("run");
+    let ok = run(&["check", "examples/scenes/geostatic_box.toml"]);
+    assert_eq!(ok.status.code(), Some(0), "{}", String::from_utf8_lossy(&ok.stderr));
+    assert!(String::from_utf8_lossy(&ok.stdout).contains("effects: rheology {mcc}"));
+    let bad = run(&["check", "examples/scenes/geostatic_box.toml", "--set", "sph.kernel=\"gauss\""]);
+    assert_eq!(bad.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("key `sph.kernel`: unknown variant `gauss`"), "{err}");
+    let missing = run(&["check", "no/such/scene.toml"]);
+    assert_eq!(missing.status.code(), Some(2));
+}
