@@ -5,11 +5,13 @@
 //! and material files, the material-point driver, plots and the command-line tool's commands.
 #![warn(missing_docs)]
 
+pub mod bench;
 pub mod cli;
 pub mod element;
 pub mod input;
 pub mod material;
 pub mod plot;
+pub mod run;
 pub mod scene;
 
 pub mod element_plot;
@@ -17,5 +19,4 @@ pub mod element_plot;
 pub use regolith_fsi as fsi;
 pub use regolith_terrain as terrain;
 
-/// Default free-surface threshold on `Σ (m/ρ)(−r·∇W)`, which is 3 deep inside the soil.
-pub const DEFAULT_FREE_SURFACE_THRESHOLD: f64 = 2.0;
+pub use regolith_fsi::config::DEFAULT_FREE_SURFACE_THRESHOLD;

@@ -9,8 +9,12 @@
 #![warn(missing_docs)]
 
 pub mod config;
+pub mod cpu;
+pub mod kernel;
 pub mod math;
+mod particles;
 mod real;
 pub mod rheology;
 
+pub use particles::{MarkerInit, ParticleInit, SolverError, StepReport};
 pub use real::Real;

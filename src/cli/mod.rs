@@ -1,8 +1,10 @@
 //! Command-line commands. Each returns a [`Failure`]: an input error (exit code 2, one line
 //! naming the file or flag and what is allowed) or a run failure (exit code 1).
 
+mod bench;
 mod check;
 mod element;
+mod run;
 
 use std::path::PathBuf;
 
@@ -47,6 +49,28 @@ pub enum Precision {
     F32,
     /// Double precision (the reference).
     F64,
+}
+
+/// Compute backends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// A GPU when there is one, else the CPU.
+    Auto,
+    /// The CPU (rayon).
+    Cpu,
+    /// WGSL compute through wgpu.
+    Wgpu,
+}
+
+/// Bench rheology.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BenchModelArg {
+    /// Drucker–Prager.
+    Dp,
+    /// Modified Cam Clay.
+    Mcc,
+    /// Both, one after the other.
+    Both,
 }
 
 /// Element tests.
@@ -99,6 +123,50 @@ pub enum Command {
         #[arg(long, value_name = "DIR", default_value = "out/element")]
         out: PathBuf,
     },
+    /// Run a scene: write summary.json, particles_final.csv and plots to the output directory.
+    Run {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/run")]
+        out: PathBuf,
+        /// Backend, overriding the scene's.
+        #[arg(long, value_enum)]
+        backend: Option<BackendArg>,
+        /// Precision, overriding the scene's.
+        #[arg(long, value_enum)]
+        precision: Option<Precision>,
+        /// Override a scene key, e.g. `--set simulation.end_time=0.5` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = crate::scene::parse_set)]
+        sets: Vec<(String, toml::Value)>,
+        /// No progress output.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Time a fixed granular block collapse (particle-steps/s, neighbour interactions/s).
+    Bench {
+        /// Soil particles (about).
+        #[arg(long, value_name = "N", default_value_t = 100_000)]
+        particles: usize,
+        /// Rheology: dp, mcc or both.
+        #[arg(long, value_enum, default_value_t = BenchModelArg::Both)]
+        model: BenchModelArg,
+        /// Backend.
+        #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+        backend: BackendArg,
+        /// Precision.
+        #[arg(long, value_enum, default_value_t = Precision::F32)]
+        precision: Precision,
+        /// Timed steps.
+        #[arg(long, value_name = "N", default_value_t = 40)]
+        steps: u64,
+        /// Untimed warm-up steps.
+        #[arg(long, value_name = "N", default_value_t = 5)]
+        warmup: u64,
+        /// Also write the results as JSON to this file.
+        #[arg(long, value_name = "FILE")]
+        json: Option<PathBuf>,
+    },
     /// Parse and validate a scene file and print what would run.
     Check {
         /// Scene file (TOML).
@@ -127,5 +195,11 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             })
         }
         Command::Check { scene, sets } => check::run(&scene, &sets),
+        Command::Bench { particles, model, backend, precision, steps, warmup, json } => {
+            bench::run(particles, model, backend, precision, steps, warmup, json.as_deref())
+        }
+        Command::Run { scene, out, backend, precision, sets, quiet } => {
+            run::run(&scene, &out, backend, precision, &sets, quiet)
+        }
     }
 }

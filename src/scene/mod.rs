@@ -15,7 +15,7 @@
 //! spacing = 0.02            # m
 //! h_factor = 1.2
 //! kernel = "wendland"       # or "cubic"
-//! artificial_viscosity = 0.5
+//! artificial_viscosity = 0.1
 //! shifting = "xsph"         # "none" | "xsph" | "ppst" | "ppst+xsph"
 //!
 //! [[materials]]
@@ -141,10 +141,16 @@ fn key_err(path: &Path, source: &str, key: impl Into<String>, message: impl Into
 /// Reads, overrides (`--set key=value`, applied in order) and validates a scene file.
 pub fn load_scene(path: &Path, sets: &[(String, toml::Value)]) -> Result<Scene, InputError> {
     let source = read_text(path)?;
+    load_scene_source(path, &source, sets)
+}
+
+/// Like [`load_scene`] for scene text already in memory; `path` names it in messages and
+/// anchors relative file references.
+pub fn load_scene_source(path: &Path, source: &str, sets: &[(String, toml::Value)]) -> Result<Scene, InputError> {
     // Parse the file as written first, so that errors carry the file's own line numbers.
-    let mut file: SceneFile = parse_toml(path, &source)?;
+    let mut file: SceneFile = parse_toml(path, source)?;
     if !sets.is_empty() {
-        let mut table: toml::Table = parse_toml(path, &source)?;
+        let mut table: toml::Table = parse_toml(path, source)?;
         for (key, value) in sets {
             overrides::apply(&mut table, key, value.clone())
                 .map_err(|m| InputError::flag("--set", format!("{key}: {m}")))?;
@@ -156,7 +162,7 @@ pub fn load_scene(path: &Path, sets: &[(String, toml::Value)]) -> Result<Scene, 
             e
         })?;
     }
-    resolve(path, &source, file).map_err(|mut err| {
+    resolve(path, source, file).map_err(|mut err| {
         // A value that came from --set is reported as such, not at the file's line.
         if let Some(k) = &err.key
             && sets.iter().any(|(s, _)| s == k)
@@ -240,7 +246,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     if !(h_factor.is_finite() && (1.0..=2.0).contains(&h_factor)) {
         return Err(e("sph.h_factor", format!("must be in [1.0, 2.0] (h/d0; got {h_factor})")));
     }
-    let alpha = sph.artificial_viscosity.unwrap_or(0.5);
+    let alpha = sph.artificial_viscosity.unwrap_or(0.1);
     if !(alpha.is_finite() && (0.0..=5.0).contains(&alpha)) {
         return Err(e("sph.artificial_viscosity", format!("must be in [0, 5] (got {alpha})")));
     }
@@ -266,10 +272,12 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     }
     let free_surface = sph.free_surface.unwrap_or(true);
     let threshold = sph.free_surface_threshold.unwrap_or(crate::DEFAULT_FREE_SURFACE_THRESHOLD);
-    if !(threshold.is_finite() && threshold > 0.0 && threshold < 3.0) {
+    if !(threshold.is_finite() && threshold > 0.0 && threshold < 1.0) {
         return Err(e(
             "sph.free_surface_threshold",
-            format!("must be in (0, 3): Σ(m/ρ)(−r·∇W) is 3 inside the soil (got {threshold})"),
+            format!(
+                "must be in (0, 1): the smallest eigenvalue of Σ V (x_b − x_a) ⊗ ∇W is 1 inside the soil (got {threshold})"
+            ),
         ));
     }
     if !free_surface && sph.free_surface_threshold.is_some() {

@@ -6,9 +6,11 @@
 //! materials per scene.
 #![warn(missing_docs)]
 
+mod generate;
 mod heightmap;
 mod shapes;
 
+pub use generate::{Lattice, RegionSpec, TerrainBuild, build_terrain};
 pub use heightmap::Heightmap;
 pub use shapes::{Aabb, SoilRegion, Surface};
 
@@ -27,4 +29,7 @@ pub enum TerrainError {
         /// What is wrong and what is allowed.
         message: String,
     },
+    /// The regions or materials are inconsistent.
+    #[error("{0}")]
+    Setup(String),
 }

@@ -104,6 +104,25 @@ impl<T: Real> Sym3<T> {
         let n = self * (T::one() / a);
         a * (T::of(1.5) * n.ddot(n)).sqrt()
     }
+    /// Smallest eigenvalue (closed form for a symmetric 3×3, trigonometric method).
+    #[inline]
+    pub fn min_eigenvalue(self) -> T {
+        let p1 = self.xy * self.xy + self.xz * self.xz + self.yz * self.yz;
+        let three = T::of(3.0);
+        let q = self.trace() / three;
+        if p1 <= T::epsilon() * (self.xx.abs() + self.yy.abs() + self.zz.abs()).powi(2) {
+            return self.xx.min(self.yy).min(self.zz);
+        }
+        let p2 = (self.xx - q).powi(2) + (self.yy - q).powi(2) + (self.zz - q).powi(2) + T::of(2.0) * p1;
+        let p = (p2 / T::of(6.0)).sqrt();
+        let b = (self - Sym3::iso(q)) * (T::one() / p);
+        let det = b.xx * (b.yy * b.zz - b.yz * b.yz) - b.xy * (b.xy * b.zz - b.yz * b.xz)
+            + b.xz * (b.xy * b.yz - b.yy * b.xz);
+        let r = (det / T::of(2.0)).max(-T::one()).min(T::one());
+        let phi = r.acos() / three;
+        // Eigenvalues q + 2p cos(φ + 2πk/3); the smallest is k = 1.
+        q + T::of(2.0) * p * (phi + T::of(2.0 * std::f64::consts::PI / 3.0)).cos()
+    }
     /// Matrix-vector product.
     #[inline(always)]
     pub fn mul_vec(self, v: Vec3<T>) -> Vec3<T> {
@@ -168,5 +187,29 @@ impl<T: Real> SubAssign for Sym3<T> {
     #[inline(always)]
     fn sub_assign(&mut self, o: Self) {
         *self = *self - o;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn min_eigenvalue_matches_known_spectra() {
+        // diag with a rotation: eigenvalues 0.5, 0.8, 1.3
+        let c = std::f64::consts::FRAC_1_SQRT_2;
+        // R = rotation about z by 45°, A = R diag(0.5, 0.8, 1.3) Rᵀ
+        let a = Sym3::new(0.5 * c * c + 0.8 * c * c, 0.5 * c * c + 0.8 * c * c, 1.3, (0.5 - 0.8) * c * c, 0.0, 0.0);
+        assert!((a.min_eigenvalue() - 0.5).abs() < 1e-12);
+        assert!((Sym3::diag(2.0_f64, -1.0, 3.0).min_eigenvalue() + 1.0).abs() < 1e-12);
+        assert!((Sym3::iso(0.7_f32).min_eigenvalue() - 0.7).abs() < 1e-6);
+        let b = Sym3::new(1.0_f64, 2.0, 3.0, 0.4, -0.2, 0.7);
+        // Check against the characteristic polynomial: det(B − λ I) = 0.
+        let l = b.min_eigenvalue();
+        let m = b - Sym3::iso(l);
+        let det = m.xx * (m.yy * m.zz - m.yz * m.yz) - m.xy * (m.xy * m.zz - m.yz * m.xz)
+            + m.xz * (m.xy * m.yz - m.yy * m.xz);
+        assert!(det.abs() < 1e-10, "det = {det}");
+        assert!(l < 1.0);
     }
 }

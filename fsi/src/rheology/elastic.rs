@@ -4,7 +4,7 @@ use crate::Real;
 use crate::math::{Sym3, Vec3};
 
 /// Bulk and shear moduli (Pa) of an isotropic elastic response.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Moduli<T> {
     /// Bulk modulus K (Pa).
     pub bulk: T,

@@ -1,0 +1,168 @@
+//! Uniform cell grid over a fixed domain, rebuilt every step by counting sort.
+//!
+//! Cells are numbered z-fastest, `(ix * ny + iy) * nz + iz`, so the three cells of a column
+//! `(ix, iy)` around `iz` are one contiguous range of the sorted particles: a neighbour query
+//! visits 9 ranges instead of 27 cells. The cell edge is the kernel support 2h.
+
+use rayon::prelude::*;
+
+use crate::Real;
+use crate::math::Vec3;
+
+/// The grid's geometry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridSpec {
+    /// Lower corner of the domain (m).
+    pub origin: [f64; 3],
+    /// Cell edge (m), at least the kernel support.
+    pub cell: f64,
+    /// Cells along x, y, z.
+    pub dims: [usize; 3],
+}
+
+impl GridSpec {
+    /// A grid covering `[min, max]` with cells of at least `cell` (m).
+    pub fn covering(min: [f64; 3], max: [f64; 3], cell: f64) -> Self {
+        let dims = [0, 1, 2].map(|a| (((max[a] - min[a]) / cell).ceil() as usize).max(1));
+        Self { origin: min, cell, dims }
+    }
+    /// Number of cells.
+    pub fn cells(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+    /// Upper corner (m).
+    pub fn max(&self) -> [f64; 3] {
+        [0, 1, 2].map(|a| self.origin[a] + self.dims[a] as f64 * self.cell)
+    }
+}
+
+/// Cell lookups in precision `T`.
+#[derive(Clone, Copy, Debug)]
+pub struct CellIndexer<T> {
+    origin: Vec3<T>,
+    inv_cell: T,
+    dims: [usize; 3],
+}
+
+impl<T: Real> CellIndexer<T> {
+    /// From a grid spec.
+    pub fn new(spec: &GridSpec) -> Self {
+        Self { origin: Vec3::of(spec.origin), inv_cell: T::one() / T::of(spec.cell), dims: spec.dims }
+    }
+    /// Integer cell coordinates of a point, or `None` outside the grid (or non-finite).
+    #[inline(always)]
+    pub fn coords(&self, p: Vec3<T>) -> Option<[usize; 3]> {
+        let f = [
+            (p.x - self.origin.x) * self.inv_cell,
+            (p.y - self.origin.y) * self.inv_cell,
+            (p.z - self.origin.z) * self.inv_cell,
+        ];
+        let mut c = [0usize; 3];
+        for a in 0..3 {
+            // NaN lands outside.
+            if f[a].is_nan() || f[a] < T::zero() {
+                return None;
+            }
+            let i = f[a].floor().as_f64() as usize;
+            if i >= self.dims[a] {
+                return None;
+            }
+            c[a] = i;
+        }
+        Some(c)
+    }
+    /// Linear index of cell coordinates.
+    #[inline(always)]
+    pub fn linear(&self, c: [usize; 3]) -> usize {
+        (c[0] * self.dims[1] + c[1]) * self.dims[2] + c[2]
+    }
+    /// Grid dimensions.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+}
+
+/// The result of a counting sort: particles grouped by cell.
+#[derive(Clone, Debug, Default)]
+pub struct CellSort {
+    /// `start[c]..start[c + 1]` are the sorted indices of cell `c`; `start[cells]` is the
+    /// number of particles inside the grid (those outside come last).
+    pub start: Vec<u32>,
+    /// `order[k]` is the old index of the particle now at position `k`.
+    pub order: Vec<u32>,
+    /// Scratch: cell of each particle before sorting.
+    cell_of: Vec<u32>,
+}
+
+impl CellSort {
+    /// Sorts points by cell (stable within a cell). Points outside the grid go to the end.
+    pub fn sort<T: Real>(&mut self, idx: &CellIndexer<T>, pos: &[Vec3<T>]) {
+        let cells = idx.dims[0] * idx.dims[1] * idx.dims[2];
+        let outside = cells as u32;
+        self.cell_of.resize(pos.len(), 0);
+        self.cell_of.par_iter_mut().zip(pos.par_iter()).for_each(|(c, p)| {
+            *c = idx.coords(*p).map(|c3| idx.linear(c3) as u32).unwrap_or(outside);
+        });
+        self.start.clear();
+        self.start.resize(cells + 2, 0);
+        for &c in &self.cell_of {
+            self.start[c as usize + 1] += 1;
+        }
+        for c in 0..=cells {
+            self.start[c + 1] += self.start[c];
+        }
+        self.order.resize(pos.len(), 0);
+        let mut next: Vec<u32> = self.start[..=cells].to_vec();
+        for (i, &c) in self.cell_of.iter().enumerate() {
+            let slot = &mut next[c as usize];
+            self.order[*slot as usize] = i as u32;
+            *slot += 1;
+        }
+        self.start.truncate(cells + 1);
+    }
+
+    /// Number of points inside the grid.
+    pub fn inside(&self) -> usize {
+        self.start.last().copied().unwrap_or(0) as usize
+    }
+}
+
+/// Reorders `v` so that `v_new[k] = v_old[order[k]]`, using `tmp` as scratch.
+pub fn permute<X: Copy + Send + Sync + Default>(v: &mut Vec<X>, order: &[u32], tmp: &mut Vec<X>) {
+    tmp.clear();
+    tmp.resize(v.len(), X::default());
+    tmp.par_iter_mut().zip(order.par_iter()).for_each(|(t, &o)| *t = v[o as usize]);
+    std::mem::swap(v, tmp);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counting_sort_groups_by_cell_and_puts_outsiders_last() {
+        let spec = GridSpec::covering([0.0; 3], [1.0, 1.0, 1.0], 0.25);
+        assert_eq!(spec.dims, [4, 4, 4]);
+        let idx = CellIndexer::<f64>::new(&spec);
+        let pts = vec![
+            Vec3::new(0.9, 0.9, 0.9),
+            Vec3::new(0.1, 0.1, 0.1),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.1, 0.1, 0.2),
+            Vec3::new(f64::NAN, 0.0, 0.0),
+            Vec3::new(0.1, 0.1, 0.3),
+        ];
+        let mut s = CellSort::default();
+        s.sort(&idx, &pts);
+        assert_eq!(s.inside(), 4);
+        assert_eq!(&s.order[..4], &[1, 3, 5, 0]);
+        // z-fastest: cells (0,0,0) and (0,0,1) are adjacent in the order.
+        assert_eq!(idx.linear([0, 0, 1]), idx.linear([0, 0, 0]) + 1);
+        let c0 = idx.linear([0, 0, 0]);
+        assert_eq!(s.start[c0 + 1] - s.start[c0], 2);
+        let mut v: Vec<u32> = (0..6).collect();
+        let mut tmp = Vec::new();
+        permute(&mut v, &s.order, &mut tmp);
+        assert_eq!(&v[..4], &[1, 3, 5, 0]);
+    }
+}

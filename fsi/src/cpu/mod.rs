@@ -1,0 +1,640 @@
+//! The CPU backend: rayon over cell-sorted structure-of-arrays particles. It is the reference
+//! every other backend is compared with, and the fast path on machines without a GPU.
+//!
+//! One step:
+//! 1. counting-sort the soil particles by cell and permute every array (particles stay in cell
+//!    order, so a neighbour loop reads nearby memory); markers are sorted indirectly so their
+//!    indices stay stable for the coupling layer;
+//! 2. build soil–soil, soil–marker and marker–soil neighbour lists (radius 2h), reused by both
+//!    stages;
+//! 3. stage 1: extrapolate marker velocity and stress, evaluate the soil rates, flag the free
+//!    surface, choose dt;
+//! 4. midpoint: advance to t + dt/2 (plastic correction), evaluate again (with marker forces),
+//!    advance from t to t + dt (plastic correction from the state at t). Euler does one
+//!    evaluation and a symplectic (velocity-first) update.
+
+mod grid;
+mod neighbors;
+mod rates;
+
+pub use grid::GridSpec;
+
+use rayon::prelude::*;
+
+use crate::Real;
+use crate::config::{Integrator, KernelKind, SolverConfig, TimeStep};
+use crate::kernel::{CubicSpline, Kernel, WendlandC2};
+use crate::math::{Sym3, Vec3};
+use crate::particles::{MarkerInit, ParticleInit, SolverError, StepReport};
+use crate::rheology::{Material, Moduli, PointState, RheologyError};
+
+use grid::{CellIndexer, CellSort, permute};
+use neighbors::NeighborList;
+use rates::{Packed, PairConsts, Rate};
+
+/// Scratch buffers for permutations, one per element type.
+#[derive(Default)]
+struct Scratch<T> {
+    v3: Vec<Vec3<T>>,
+    t: Vec<T>,
+    sym: Vec<Sym3<T>>,
+    st: Vec<PointState<T>>,
+    u16: Vec<u16>,
+    u32: Vec<u32>,
+    b: Vec<bool>,
+}
+
+/// Mutable access to the markers' prescribed motion (original order).
+pub struct MarkerKinematics<'a, T> {
+    /// Positions (m).
+    pub pos: &'a mut [Vec3<T>],
+    /// Velocities (m/s).
+    pub vel: &'a mut [Vec3<T>],
+    /// Accelerations (m/s²), used by the boundary-stress extrapolation.
+    pub acc: &'a mut [Vec3<T>],
+    /// Owners (0 = fixed walls, k + 1 = body k).
+    pub owner: &'a [u32],
+}
+
+/// SPH soil on the CPU, in precision `T`.
+pub struct CpuSph<T: Real> {
+    cfg: SolverConfig,
+    consts: PairConsts<T>,
+    materials: Vec<Material<T>>,
+    // Soil, cell-sorted.
+    pos: Vec<Vec3<T>>,
+    vel: Vec<Vec3<T>>,
+    rho: Vec<T>,
+    sigma: Vec<Sym3<T>>,
+    state: Vec<PointState<T>>,
+    material: Vec<u16>,
+    mass: Vec<T>,
+    id: Vec<u32>,
+    free_surface: Vec<bool>,
+    active: usize,
+    // Midpoint stage.
+    s_pos: Vec<Vec3<T>>,
+    s_vel: Vec<Vec3<T>>,
+    s_rho: Vec<T>,
+    s_sigma: Vec<Sym3<T>>,
+    s_state: Vec<PointState<T>>,
+    packed: Vec<Packed<T>>,
+    moduli: Vec<Moduli<T>>,
+    rates: Vec<Rate<T>>,
+    // Markers, in their original order.
+    m_pos: Vec<Vec3<T>>,
+    m_vel: Vec<Vec3<T>>,
+    m_acc: Vec<Vec3<T>>,
+    m_owner: Vec<u32>,
+    m_force: Vec<Vec3<T>>,
+    // Markers inside the grid, in cell order (index k ↔ original marker_sort.order[k]).
+    ms_pos: Vec<Vec3<T>>,
+    ms_vel: Vec<Vec3<T>>,
+    ms_acc: Vec<Vec3<T>>,
+    /// Sorted markers with soil in reach this step; `m_packed`, `ms_force` and the rows of
+    /// `nl_ms` are indexed like it, and `nl_sm` lists rows of it.
+    touched: Vec<u32>,
+    m_packed: Vec<Packed<T>>,
+    ms_force: Vec<Vec3<T>>,
+    /// Marker kinematics changed since the markers were last sorted.
+    markers_dirty: bool,
+    m_volume: T,
+    ref_rho: T,
+    ref_cs: T,
+    grid: GridSpec,
+    idx: CellIndexer<T>,
+    soil_sort: CellSort,
+    marker_sort: CellSort,
+    nl_ss: NeighborList,
+    nl_sm: NeighborList,
+    nl_ms: NeighborList,
+    scratch: Scratch<T>,
+    time: f64,
+    steps: u64,
+    c_max: f64,
+    marker_impulse: [f64; 3],
+}
+
+macro_rules! dispatch_effects {
+    ($visc:expr, $xsph:expr, $ppst:expr, $f:ident :: <$t:ty, $k:ty> ($($arg:expr),* $(,)?)) => {
+        match ($visc, $xsph, $ppst) {
+            (true, true, true) => $f::<$t, $k, true, true, true>($($arg),*),
+            (true, true, false) => $f::<$t, $k, true, true, false>($($arg),*),
+            (true, false, true) => $f::<$t, $k, true, false, true>($($arg),*),
+            (true, false, false) => $f::<$t, $k, true, false, false>($($arg),*),
+            (false, true, true) => $f::<$t, $k, false, true, true>($($arg),*),
+            (false, true, false) => $f::<$t, $k, false, true, false>($($arg),*),
+            (false, false, true) => $f::<$t, $k, false, false, true>($($arg),*),
+            (false, false, false) => $f::<$t, $k, false, false, false>($($arg),*),
+        }
+    };
+}
+
+impl<T: Real> CpuSph<T> {
+    /// Builds the solver. `domain` bounds everything that can take part: a soil particle that
+    /// leaves it is counted as escaped and no longer integrated.
+    pub fn new(
+        cfg: SolverConfig,
+        materials: Vec<Material<T>>,
+        particles: &[ParticleInit],
+        markers: &[MarkerInit],
+        domain: ([f64; 3], [f64; 3]),
+    ) -> Result<Self, SolverError> {
+        if materials.is_empty() {
+            return Err(SolverError::Setup("no materials".into()));
+        }
+        if let Some(p) = particles.iter().find(|p| p.material as usize >= materials.len()) {
+            return Err(SolverError::Setup(format!("particle material index {} out of range", p.material)));
+        }
+        if let Some(p) = particles.iter().find(|p| !(p.rho > 0.0 && p.mass > 0.0)) {
+            return Err(SolverError::Setup(format!("particle at {:?} has non-positive density or mass", p.pos)));
+        }
+        if particles.len() >= u32::MAX as usize || markers.len() >= u32::MAX as usize {
+            return Err(SolverError::Setup("too many particles".into()));
+        }
+        let h = cfg.h();
+        let grid = GridSpec::covering(domain.0, domain.1, 2.0 * h);
+        let n = particles.len();
+        let ref_rho = materials.iter().map(|m| m.density.as_f64()).fold(0.0, f64::max);
+        let ref_cs = materials.iter().map(|m| m.wave_speed().as_f64()).fold(0.0, f64::max);
+        let consts = PairConsts {
+            h: T::of(h),
+            inv_h: T::of(1.0 / h),
+            alpha: match cfg.kernel {
+                KernelKind::Wendland => <WendlandC2 as Kernel<T>>::alpha(T::of(h)),
+                KernelKind::Cubic => <CubicSpline as Kernel<T>>::alpha(T::of(h)),
+            },
+            support2: T::of(4.0 * h * h),
+            visc_alpha: T::of(cfg.artificial_viscosity),
+            eta2: T::of(0.01 * h * h),
+            gravity: Vec3::of(cfg.gravity),
+        };
+        let v3 = |f: &dyn Fn(&ParticleInit) -> [f64; 3]| -> Vec<Vec3<T>> {
+            particles.iter().map(|p| Vec3::of(f(p))).collect()
+        };
+        let nm = markers.len();
+        Ok(Self {
+            cfg,
+            consts,
+            pos: v3(&|p| p.pos),
+            vel: v3(&|p| p.vel),
+            rho: particles.iter().map(|p| T::of(p.rho)).collect(),
+            sigma: particles.iter().map(|p| Sym3::of(p.sigma)).collect(),
+            state: particles.iter().map(|p| PointState { pc: T::of(p.pc), v: T::of(p.specific_volume) }).collect(),
+            material: particles.iter().map(|p| p.material).collect(),
+            mass: particles.iter().map(|p| T::of(p.mass)).collect(),
+            id: (0..n as u32).collect(),
+            free_surface: vec![false; n],
+            active: n,
+            s_pos: vec![Vec3::zero(); n],
+            s_vel: vec![Vec3::zero(); n],
+            s_rho: vec![T::zero(); n],
+            s_sigma: vec![Sym3::zero(); n],
+            s_state: vec![PointState::default(); n],
+            packed: vec![Packed::default(); n],
+            moduli: vec![Moduli { bulk: T::zero(), shear: T::zero() }; n],
+            rates: vec![Rate::default(); n],
+            m_pos: markers.iter().map(|m| Vec3::of(m.pos)).collect(),
+            m_vel: vec![Vec3::zero(); nm],
+            m_acc: vec![Vec3::zero(); nm],
+            m_owner: markers.iter().map(|m| m.owner).collect(),
+            m_force: vec![Vec3::zero(); nm],
+            ms_pos: Vec::new(),
+            ms_vel: Vec::new(),
+            ms_acc: Vec::new(),
+            touched: Vec::new(),
+            m_packed: Vec::new(),
+            ms_force: Vec::new(),
+            markers_dirty: true,
+            m_volume: T::of(cfg.spacing.powi(3)),
+            ref_rho: T::of(ref_rho),
+            ref_cs: T::of(ref_cs),
+            materials,
+            idx: CellIndexer::new(&grid),
+            grid,
+            soil_sort: CellSort::default(),
+            marker_sort: CellSort::default(),
+            nl_ss: NeighborList::default(),
+            nl_sm: NeighborList::default(),
+            nl_ms: NeighborList::default(),
+            scratch: Scratch::default(),
+            time: 0.0,
+            steps: 0,
+            c_max: ref_cs,
+            marker_impulse: [0.0; 3],
+        })
+    }
+
+    /// Solver settings.
+    pub fn config(&self) -> &SolverConfig {
+        &self.cfg
+    }
+    /// Materials, by index.
+    pub fn materials(&self) -> &[Material<T>] {
+        &self.materials
+    }
+    /// Simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+    /// The neighbour grid.
+    pub fn grid(&self) -> &GridSpec {
+        &self.grid
+    }
+    /// Total number of soil particles (active and escaped).
+    pub fn len(&self) -> usize {
+        self.pos.len()
+    }
+    /// True when there are no soil particles.
+    pub fn is_empty(&self) -> bool {
+        self.pos.is_empty()
+    }
+    /// Particles still inside the domain; they are the first `active()` entries of every array.
+    pub fn active(&self) -> usize {
+        self.active
+    }
+    /// Positions (m), cell-sorted.
+    pub fn positions(&self) -> &[Vec3<T>] {
+        &self.pos
+    }
+    /// Velocities (m/s).
+    pub fn velocities(&self) -> &[Vec3<T>] {
+        &self.vel
+    }
+    /// Densities (kg/m³).
+    pub fn densities(&self) -> &[T] {
+        &self.rho
+    }
+    /// Cauchy stresses (Pa, tension positive).
+    pub fn stresses(&self) -> &[Sym3<T>] {
+        &self.sigma
+    }
+    /// State variables (p_c, specific volume).
+    pub fn states(&self) -> &[PointState<T>] {
+        &self.state
+    }
+    /// Material index of each particle.
+    pub fn material_ids(&self) -> &[u16] {
+        &self.material
+    }
+    /// Masses (kg).
+    pub fn masses(&self) -> &[T] {
+        &self.mass
+    }
+    /// Original index of each particle (as passed to `new`).
+    pub fn ids(&self) -> &[u32] {
+        &self.id
+    }
+    /// Free-surface flags of the last step.
+    pub fn free_surface(&self) -> &[bool] {
+        &self.free_surface
+    }
+    /// Free-surface indicator of the last step's first stage: the smallest eigenvalue of
+    /// `Σ V_b (x_b − x_a) ⊗ ∇W_ab` (1 in the bulk, about 0.5 in a flat top layer).
+    pub fn free_surface_measure(&self) -> Vec<T> {
+        self.rates[..self.active].iter().map(|r| r.fs).collect()
+    }
+    /// Accelerations of the last stage used for the update (m/s²).
+    pub fn accelerations(&self) -> Vec<Vec3<T>> {
+        self.rates[..self.active].iter().map(|r| r.acc).collect()
+    }
+    /// Marker positions (m), original order.
+    pub fn marker_positions(&self) -> &[Vec3<T>] {
+        &self.m_pos
+    }
+    /// Marker owners (0 = fixed walls, k + 1 = body k), original order.
+    pub fn marker_owners(&self) -> &[u32] {
+        &self.m_owner
+    }
+    /// Force on each marker from the soil during the last step's final stage (N), original
+    /// order.
+    pub fn marker_forces(&self) -> &[Vec3<T>] {
+        &self.m_force
+    }
+    /// Prescribed marker kinematics (original order), for markers that belong to moving
+    /// bodies. Taking it marks the markers for re-sorting at the next step.
+    pub fn marker_kinematics_mut(&mut self) -> MarkerKinematics<'_, T> {
+        self.markers_dirty = true;
+        MarkerKinematics { pos: &mut self.m_pos, vel: &mut self.m_vel, acc: &mut self.m_acc, owner: &self.m_owner }
+    }
+    /// Total impulse the markers have exerted on the soil since the start (N s).
+    pub fn marker_impulse(&self) -> [f64; 3] {
+        self.marker_impulse
+    }
+    /// Total mass of the active soil (kg).
+    pub fn active_mass(&self) -> f64 {
+        self.mass[..self.active].iter().map(|m| m.as_f64()).sum()
+    }
+    /// Total mass of all soil particles, escaped included (kg).
+    pub fn total_mass(&self) -> f64 {
+        self.mass.iter().map(|m| m.as_f64()).sum()
+    }
+    /// Total momentum of the active soil (kg m/s).
+    pub fn momentum(&self) -> [f64; 3] {
+        let mut p = [0.0; 3];
+        for i in 0..self.active {
+            let v = self.vel[i].as_f64();
+            let m = self.mass[i].as_f64();
+            for a in 0..3 {
+                p[a] += m * v[a];
+            }
+        }
+        p
+    }
+
+    fn sort_and_search(&mut self) {
+        let s = &mut self.scratch;
+        self.soil_sort.sort(&self.idx, &self.pos[..self.active]);
+        let order = &self.soil_sort.order;
+        // Escaped particles beyond `active` keep their place; sort only the active prefix.
+        macro_rules! perm {
+            ($v:expr, $tmp:expr) => {{
+                let mut head: Vec<_> = $v[..self.active].to_vec();
+                permute(&mut head, order, &mut $tmp);
+                $v[..self.active].copy_from_slice(&head);
+            }};
+        }
+        perm!(self.pos, s.v3);
+        perm!(self.vel, s.v3);
+        perm!(self.rho, s.t);
+        perm!(self.sigma, s.sym);
+        perm!(self.state, s.st);
+        perm!(self.material, s.u16);
+        perm!(self.mass, s.t);
+        perm!(self.id, s.u32);
+        perm!(self.free_surface, s.b);
+        self.active = self.soil_sort.inside();
+
+        // Markers: fixed walls are sorted once; bodies re-sort when their kinematics change.
+        if self.markers_dirty {
+            self.marker_sort.sort(&self.idx, &self.m_pos);
+            let inside = self.marker_sort.inside();
+            let mo = &self.marker_sort.order[..inside];
+            self.ms_pos.clear();
+            self.ms_pos.extend(mo.iter().map(|&o| self.m_pos[o as usize]));
+            self.ms_vel.clear();
+            self.ms_vel.extend(mo.iter().map(|&o| self.m_vel[o as usize]));
+            self.ms_acc.clear();
+            self.ms_acc.extend(mo.iter().map(|&o| self.m_acc[o as usize]));
+            self.markers_dirty = false;
+        }
+
+        let radius = T::of(2.0 * self.cfg.h());
+        let soil = &self.pos[..self.active];
+        self.nl_ss.build(soil, &self.idx, &self.soil_sort, soil, radius, true);
+        self.nl_sm.build(soil, &self.idx, &self.marker_sort, &self.ms_pos, radius, false);
+        // Only markers with soil in reach take part: the marker→soil list is the transpose.
+        self.nl_ms.transpose_compact(&mut self.nl_sm, self.ms_pos.len(), &mut self.touched);
+        self.m_packed.resize(self.touched.len(), Packed::default());
+        self.ms_force.resize(self.touched.len(), Vec3::zero());
+    }
+
+    fn evaluate(&mut self, from_stage: bool, with_forces: bool) {
+        match self.cfg.kernel {
+            KernelKind::Wendland => self.evaluate_k::<WendlandC2>(from_stage, with_forces),
+            KernelKind::Cubic => self.evaluate_k::<CubicSpline>(from_stage, with_forces),
+        }
+    }
+
+    fn evaluate_k<K: Kernel<T>>(&mut self, from_stage: bool, with_forces: bool) {
+        let n = self.active;
+        let (pos, vel, rho, sigma, state) = if from_stage {
+            (&self.s_pos[..n], &self.s_vel[..n], &self.s_rho[..n], &self.s_sigma[..n], &self.s_state[..n])
+        } else {
+            (&self.pos[..n], &self.vel[..n], &self.rho[..n], &self.sigma[..n], &self.state[..n])
+        };
+        let c = self.consts;
+        let view =
+            rates::SoilView { pos, vel, rho, sigma, state, material: &self.material[..n], mass: &self.mass[..n] };
+        rates::pack_soil(&self.materials, &view, &mut self.packed[..n], &mut self.moduli[..n]);
+        self.c_max = self.packed[..n].par_iter().map(|p| p.cs.as_f64()).reduce(|| self.ref_cs.as_f64(), f64::max);
+        rates::extrapolate_markers::<T, K>(
+            &c,
+            &self.ms_pos,
+            &self.ms_vel,
+            &self.ms_acc,
+            self.m_volume,
+            self.ref_rho,
+            self.ref_cs,
+            &self.touched,
+            &self.nl_ms,
+            &self.packed[..n],
+            sigma,
+            &mut self.m_packed,
+        );
+        let visc = self.cfg.artificial_viscosity > 0.0;
+        let (xsph, ppst) = (self.cfg.shifting.xsph(), self.cfg.shifting.ppst());
+        use rates::soil_rates;
+        dispatch_effects!(
+            visc,
+            xsph,
+            ppst,
+            soil_rates::<T, K>(
+                &c,
+                &self.packed[..n],
+                &self.m_packed,
+                &self.nl_ss,
+                &self.nl_sm,
+                sigma,
+                &self.moduli[..n],
+                &mut self.rates[..n]
+            )
+        );
+        if with_forces {
+            if visc {
+                rates::marker_forces::<T, K, true>(
+                    &c,
+                    &self.packed[..n],
+                    &self.m_packed,
+                    &self.nl_ms,
+                    &mut self.ms_force,
+                );
+            } else {
+                rates::marker_forces::<T, K, false>(
+                    &c,
+                    &self.packed[..n],
+                    &self.m_packed,
+                    &self.nl_ms,
+                    &mut self.ms_force,
+                );
+            }
+        }
+    }
+
+    fn choose_dt(&self, limit: Option<f64>) -> f64 {
+        let dt = match self.cfg.time_step {
+            TimeStep::Fixed(dt) => dt,
+            TimeStep::Adaptive { cfl, max } => {
+                let h = self.cfg.h();
+                let n = self.active;
+                let vmax = self.vel[..n].par_iter().map(|v| v.norm().as_f64()).reduce(|| 0.0, f64::max);
+                let amax = self.rates[..n].par_iter().map(|r| r.acc.norm().as_f64()).reduce(|| 0.0, f64::max);
+                let mut dt = cfl * h / (self.c_max + vmax);
+                if amax > 0.0 {
+                    dt = dt.min(cfl * (h / amax).sqrt());
+                }
+                dt.min(max)
+            }
+        };
+        limit.map_or(dt, |l| dt.min(l))
+    }
+
+    /// Advances by one step of the configured (fixed or adaptive) size, at most `max_dt` when
+    /// given (to land exactly on an output or end time).
+    pub fn step(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
+        self.sort_and_search();
+        let rk2 = self.cfg.integrator == Integrator::Rk2;
+        self.evaluate(false, !rk2);
+        let n = self.active;
+        if let Some(th) = self.cfg.free_surface_threshold {
+            // A particle with wall or body markers in its support is in contact, not free: it
+            // keeps its stress, so that it resists penetration and carries basal friction.
+            let th = T::of(th);
+            let nl_sm = &self.nl_sm;
+            self.free_surface[..n].par_iter_mut().zip(self.rates[..n].par_iter()).enumerate().for_each(
+                |(i, (f, r))| {
+                    *f = r.fs < th && nl_sm.of(i).is_empty();
+                },
+            );
+        }
+        let dt = self.choose_dt(max_dt);
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(SolverError::Setup(format!("time step {dt} s is not positive")));
+        }
+        if rk2 {
+            self.advance(dt, 0.5 * dt, true)?;
+            self.evaluate(true, true);
+            self.advance(dt, dt, false)?;
+        } else {
+            self.advance(dt, dt, false)?;
+        }
+        // Marker forces back to original order; impulse on the soil from the markers.
+        let mut total = [0.0; 3];
+        for f in self.m_force.iter_mut() {
+            *f = Vec3::zero();
+        }
+        for (k, &sorted) in self.touched.iter().enumerate() {
+            let o = self.marker_sort.order[sorted as usize] as usize;
+            self.m_force[o] = self.ms_force[k];
+            let f = self.ms_force[k].as_f64();
+            for (t, fa) in total.iter_mut().zip(f) {
+                *t += fa;
+            }
+        }
+        for (imp, t) in self.marker_impulse.iter_mut().zip(total) {
+            *imp -= dt * t;
+        }
+        self.time += dt;
+        self.steps += 1;
+        let max_speed = self.vel[..n].par_iter().map(|v| v.norm().as_f64()).reduce(|| 0.0, f64::max);
+        let max_accel = self.rates[..n].par_iter().map(|r| r.acc.norm().as_f64()).reduce(|| 0.0, f64::max);
+        Ok(StepReport { dt, max_speed, max_accel, active: n, pairs: self.nl_ss.pairs() + self.nl_sm.pairs() })
+    }
+
+    /// Integrates from the current state with the latest rates over `dt_s`. With `to_stage`
+    /// the result goes to the midpoint arrays; otherwise it replaces the current state (the
+    /// positions then move with the midpoint velocity for RK2).
+    fn advance(&mut self, dt: f64, dt_s: f64, to_stage: bool) -> Result<(), SolverError> {
+        let n = self.active;
+        let h = T::of(dt_s);
+        let eps = T::of(if self.cfg.shifting.xsph() { self.cfg.xsph_epsilon } else { 0.0 });
+        let shift =
+            if self.cfg.shifting.ppst() { T::of(self.cfg.shifting_coefficient * self.cfg.h()) } else { T::zero() };
+        let max_shift = T::of(0.2 * self.cfg.spacing);
+        let rk2 = self.cfg.integrator == Integrator::Rk2;
+        let (step, time) = (self.steps, self.time + dt);
+        let materials = &self.materials;
+        let rates = &self.rates[..n];
+        let fsf = &self.free_surface[..n];
+        let mats = &self.material[..n];
+        let ids = &self.id[..n];
+        let fs_on = self.cfg.free_surface_threshold.is_some();
+        let err_rheo = |i: usize, source: RheologyError| SolverError::Rheology { step, time, particle: ids[i], source };
+        if to_stage {
+            let (pos, vel, rho, sigma, state) =
+                (&self.pos[..n], &self.vel[..n], &self.rho[..n], &self.sigma[..n], &self.state[..n]);
+            self.s_pos[..n]
+                .par_iter_mut()
+                .zip(self.s_vel[..n].par_iter_mut())
+                .zip(self.s_rho[..n].par_iter_mut())
+                .zip(self.s_sigma[..n].par_iter_mut().zip(self.s_state[..n].par_iter_mut()))
+                .enumerate()
+                .try_for_each(|(i, (((sp, sv), sr), (ss, sst)))| {
+                    let r = &rates[i];
+                    *sv = vel[i] + r.acc * h;
+                    *sp = pos[i] + (vel[i] + r.xsph * eps) * h;
+                    *sr = rho[i] + r.drho * h;
+                    let (s, st) = correct(&materials[mats[i] as usize], &sigma[i], &state[i], r, h, fs_on && fsf[i])
+                        .map_err(|e| err_rheo(i, e))?;
+                    *ss = s;
+                    *sst = st;
+                    Ok(())
+                })
+        } else {
+            let s_vel = &self.s_vel[..n];
+            self.pos[..n]
+                .par_iter_mut()
+                .zip(self.vel[..n].par_iter_mut())
+                .zip(self.rho[..n].par_iter_mut())
+                .zip(self.sigma[..n].par_iter_mut().zip(self.state[..n].par_iter_mut()))
+                .enumerate()
+                .try_for_each(|(i, (((p, v), rh), (s, st)))| {
+                    let r = &rates[i];
+                    let v_old = *v;
+                    *v = v_old + r.acc * h;
+                    let v_move = if rk2 { s_vel[i] } else { *v };
+                    let mut dx = (v_move + r.xsph * eps) * h;
+                    if shift > T::zero() && !fsf[i] {
+                        let mut d = r.grad_c * (-(shift * v_move.norm() * h));
+                        let len = d.norm();
+                        if len > max_shift {
+                            d = d * (max_shift / len);
+                        }
+                        dx += d;
+                    }
+                    *p += dx;
+                    *rh += r.drho * h;
+                    let (s_new, st_new) = correct(&materials[mats[i] as usize], s, st, r, h, fs_on && fsf[i])
+                        .map_err(|e| err_rheo(i, e))?;
+                    *s = s_new;
+                    *st = st_new;
+                    if !p.is_finite() {
+                        return Err(SolverError::NonFinite { step, time, particle: ids[i], what: "position" });
+                    }
+                    if !v.is_finite() {
+                        return Err(SolverError::NonFinite { step, time, particle: ids[i], what: "velocity" });
+                    }
+                    if !(rh.is_finite() && *rh > T::zero()) {
+                        return Err(SolverError::NonFinite { step, time, particle: ids[i], what: "density" });
+                    }
+                    Ok(())
+                })
+        }
+    }
+}
+
+/// Stress update with the plastic correction: `σ + dt σ̇` corrected by the material, state from
+/// the start of the step; free-surface particles carry no stress and do not harden.
+#[inline]
+fn correct<T: Real>(
+    mat: &Material<T>,
+    sigma: &Sym3<T>,
+    state: &PointState<T>,
+    r: &Rate<T>,
+    dt: T,
+    free_surface: bool,
+) -> Result<(Sym3<T>, PointState<T>), RheologyError> {
+    let mut st = *state;
+    let s = if free_surface {
+        Sym3::zero()
+    } else {
+        let trial = *sigma + r.dsigma * dt;
+        mat.correct(trial, &mut st, r.moduli, &r.d)?
+    };
+    st.advance_volume(r.d.trace() * dt);
+    Ok((s, st))
+}

@@ -1,0 +1,290 @@
+//! The rate evaluation of one stage: boundary-marker extrapolation, then one fused pass over
+//! each soil particle's neighbours giving the density rate, acceleration, velocity gradient,
+//! XSPH correction, shifting gradient and free-surface measure; then the Jaumann stress rate.
+//!
+//! Pair terms are written so that the (a, b) and (b, a) evaluations are exact negatives of
+//! each other (same operands in the same order), which is what makes the soil's internal
+//! forces cancel to round-off and the marker forces equal and opposite to what the soil feels.
+
+use rayon::prelude::*;
+
+use crate::Real;
+use crate::kernel::Kernel;
+use crate::math::{Mat3, Sym3, Vec3};
+use crate::rheology::{Material, Moduli, PointState, jaumann_rate};
+
+use super::neighbors::NeighborList;
+
+/// What a neighbour contributes, packed into one record per particle so that a pair loop reads
+/// one contiguous 64-byte (f32) record per neighbour.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Packed<T> {
+    pub x: Vec3<T>,
+    pub v: Vec3<T>,
+    /// σ / ρ² (Pa m⁶/kg²).
+    pub s: Sym3<T>,
+    /// m / ρ (m³).
+    pub vol: T,
+    pub mass: T,
+    pub rho: T,
+    /// Elastic wave speed (m/s).
+    pub cs: T,
+}
+
+/// Per-particle rates of one stage.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Rate<T> {
+    pub drho: T,
+    pub acc: Vec3<T>,
+    pub dsigma: Sym3<T>,
+    /// Rate of deformation D (1/s).
+    pub d: Sym3<T>,
+    /// XSPH velocity correction (m/s), not yet scaled by ε.
+    pub xsph: Vec3<T>,
+    /// Σ V_b ∇W_ab, the concentration gradient (1/m).
+    pub grad_c: Vec3<T>,
+    /// Free-surface indicator: the smallest eigenvalue of `Σ V_b (x_b − x_a) ⊗ ∇W_ab`
+    /// (Marrone et al. 2010), 1 inside the soil, about 0.5 in a flat top layer, lower at edges
+    /// and for isolated particles.
+    pub fs: T,
+    /// Moduli the stress rate used.
+    pub moduli: Moduli<T>,
+}
+
+/// Constants of the pair loops.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PairConsts<T> {
+    pub h: T,
+    pub inv_h: T,
+    pub alpha: T,
+    pub support2: T,
+    pub visc_alpha: T,
+    pub eta2: T,
+    pub gravity: Vec3<T>,
+}
+
+/// The soil state a stage reads.
+pub(crate) struct SoilView<'a, T> {
+    pub pos: &'a [Vec3<T>],
+    pub vel: &'a [Vec3<T>],
+    pub rho: &'a [T],
+    pub sigma: &'a [Sym3<T>],
+    pub state: &'a [PointState<T>],
+    pub material: &'a [u16],
+    pub mass: &'a [T],
+}
+
+/// Builds the soil records and per-particle moduli.
+pub(crate) fn pack_soil<T: Real>(
+    materials: &[Material<T>],
+    s: &SoilView<'_, T>,
+    packed: &mut [Packed<T>],
+    moduli: &mut [Moduli<T>],
+) {
+    packed.par_iter_mut().zip(moduli.par_iter_mut()).enumerate().for_each(|(i, (p, m))| {
+        let mat = &materials[s.material[i] as usize];
+        *m = mat.moduli(&s.sigma[i], &s.state[i]);
+        let r = s.rho[i];
+        *p = Packed {
+            x: s.pos[i],
+            v: s.vel[i],
+            s: s.sigma[i] * (T::one() / (r * r)),
+            vol: s.mass[i] / r,
+            mass: s.mass[i],
+            rho: r,
+            cs: (m.p_wave() / mat.density).sqrt(),
+        };
+    });
+}
+
+/// Boundary-marker extrapolation (Adami et al. 2012) for the markers `touched[k]` that have
+/// soil within reach (row `k` of `nl_ms`, result in `out[k]`). Each takes
+/// `v_w = 2 v_body − Σ v W / Σ W` (no slip), `σ_w = Σ σ W / Σ W − Δp I` with
+/// `Δp = (g − a_body) · Σ ρ (x_w − x_b) W / Σ W` (the hydrostatic step from the soil to the
+/// marker), and `ρ_w = Σ ρ W / Σ W`. A marker with no soil around it keeps the body's velocity
+/// and zero stress.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>>(
+    c: &PairConsts<T>,
+    marker_pos: &[Vec3<T>],
+    marker_vel: &[Vec3<T>],
+    marker_acc: &[Vec3<T>],
+    marker_volume: T,
+    reference_rho: T,
+    reference_cs: T,
+    touched: &[u32],
+    nl_ms: &NeighborList,
+    soil: &[Packed<T>],
+    soil_sigma: &[Sym3<T>],
+    out: &mut [Packed<T>],
+) {
+    out.par_iter_mut().enumerate().for_each(|(k, o)| {
+        let m = touched[k] as usize;
+        let xw = marker_pos[m];
+        let (mut sw, mut sv, mut ss, mut srr, mut srho, mut scs) =
+            (T::zero(), Vec3::zero(), Sym3::zero(), Vec3::zero(), T::zero(), T::zero());
+        for &a in nl_ms.of(k) {
+            let pa = &soil[a as usize];
+            let r = xw - pa.x;
+            let r2 = r.norm2();
+            if r2 >= c.support2 {
+                continue;
+            }
+            let w = K::w(r2.sqrt(), c.inv_h, c.alpha);
+            sw += w;
+            sv += pa.v * w;
+            ss += soil_sigma[a as usize] * w;
+            srr += r * (pa.rho * w);
+            srho += pa.rho * w;
+            scs += pa.cs * w;
+        }
+        let tiny = T::min_positive_value().sqrt();
+        *o = if sw > tiny {
+            let inv = T::one() / sw;
+            let rho = srho * inv;
+            let dp = (c.gravity - marker_acc[m]).dot(srr) * inv;
+            let sigma = ss * inv - Sym3::iso(dp);
+            Packed {
+                x: xw,
+                v: marker_vel[m] * T::of(2.0) - sv * inv,
+                s: sigma * (T::one() / (rho * rho)),
+                vol: marker_volume,
+                mass: rho * marker_volume,
+                rho,
+                cs: scs * inv,
+            }
+        } else {
+            Packed {
+                x: xw,
+                v: marker_vel[m],
+                s: Sym3::zero(),
+                vol: marker_volume,
+                mass: reference_rho * marker_volume,
+                rho: reference_rho,
+                cs: reference_cs,
+            }
+        };
+    });
+}
+
+/// The momentum pair term `(S_a + S_b) ∇W − Π ∇W` with `S = σ/ρ²` and Monaghan's artificial
+/// viscosity on approaching pairs. Exactly antisymmetric under swapping a and b.
+#[inline(always)]
+fn pair_term<T: Real, const VISC: bool>(
+    c: &PairConsts<T>,
+    pa: &Packed<T>,
+    pb: &Packed<T>,
+    r: Vec3<T>,
+    r2: T,
+    gw: Vec3<T>,
+    vab: Vec3<T>,
+) -> Vec3<T> {
+    let mut ga = (pa.s + pb.s).mul_vec(gw);
+    if VISC {
+        let vr = vab.dot(r);
+        if vr < T::zero() {
+            let mu = c.h * vr / (r2 + c.eta2);
+            let half = T::of(0.5);
+            let pi = -c.visc_alpha * half * (pa.cs + pb.cs) * mu / (half * (pa.rho + pb.rho));
+            ga -= gw * pi;
+        }
+    }
+    ga
+}
+
+/// Soil rates for all particles. `XSPH` and `PPST` select the optional sums at compile time.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn soil_rates<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: bool, const PPST: bool>(
+    c: &PairConsts<T>,
+    soil: &[Packed<T>],
+    markers: &[Packed<T>],
+    nl_ss: &NeighborList,
+    nl_sm: &NeighborList,
+    sigma: &[Sym3<T>],
+    moduli: &[Moduli<T>],
+    out: &mut [Rate<T>],
+) {
+    out.par_iter_mut().enumerate().for_each(|(a, out)| {
+        let pa = &soil[a];
+        out.moduli = moduli[a];
+        let mut drho = T::zero();
+        let mut acc = Vec3::zero();
+        let mut l = Mat3::zero();
+        let mut xs = Vec3::zero();
+        let mut gc = Vec3::zero();
+        let mut fs = Sym3::zero();
+        let mut visit = |pb: &Packed<T>, is_soil: bool| {
+            let r = pa.x - pb.x;
+            let r2 = r.norm2();
+            if r2 >= c.support2 {
+                return;
+            }
+            let rr = r2.sqrt();
+            let f = K::grad_factor(rr, c.inv_h, c.alpha);
+            let gw = r * f;
+            let vab = pa.v - pb.v;
+            drho += pb.vol * vab.dot(gw);
+            acc += pair_term::<T, VISC>(c, pa, pb, r, r2, gw, vab) * pb.mass;
+            // L_ij = Σ V_b (v_b − v_a)_i ∂_j W
+            let mv = vab * (-pb.vol);
+            for i in 0..3 {
+                let vi = mv.get(i);
+                l.m[i][0] += vi * gw.x;
+                l.m[i][1] += vi * gw.y;
+                l.m[i][2] += vi * gw.z;
+            }
+            // (x_b − x_a) ⊗ ∇W = −F r ⊗ r: symmetric for a radial kernel.
+            let k = -pb.vol * f;
+            fs += Sym3::new(k * r.x * r.x, k * r.y * r.y, k * r.z * r.z, k * r.x * r.y, k * r.x * r.z, k * r.y * r.z);
+            if XSPH && is_soil {
+                let w = K::w(rr, c.inv_h, c.alpha);
+                xs -= vab * (T::of(2.0) * pb.mass / (pa.rho + pb.rho) * w);
+            }
+            if PPST {
+                gc += gw * pb.vol;
+            }
+        };
+        for &b in nl_ss.of(a) {
+            visit(&soil[b as usize], true);
+        }
+        for &w in nl_sm.of(a) {
+            visit(&markers[w as usize], false);
+        }
+        let d = l.sym();
+        let spin = l.skew();
+        out.drho = drho * pa.rho;
+        out.acc = acc + c.gravity;
+        out.d = d;
+        out.dsigma = jaumann_rate(&sigma[a], &d, spin, out.moduli);
+        out.xsph = xs;
+        out.grad_c = gc;
+        out.fs = fs.min_eigenvalue();
+    });
+}
+
+/// Force (N) on each touched marker (row `k` of `nl_ms`, record `markers[k]`) from the soil:
+/// minus the same pair terms the soil particles receive.
+pub(crate) fn marker_forces<T: Real, K: Kernel<T>, const VISC: bool>(
+    c: &PairConsts<T>,
+    soil: &[Packed<T>],
+    markers: &[Packed<T>],
+    nl_ms: &NeighborList,
+    out: &mut [Vec3<T>],
+) {
+    out.par_iter_mut().enumerate().for_each(|(k, out)| {
+        let pw = &markers[k];
+        let mut f = Vec3::zero();
+        for &a in nl_ms.of(k) {
+            let pa = &soil[a as usize];
+            let r = pa.x - pw.x;
+            let r2 = r.norm2();
+            if r2 >= c.support2 {
+                continue;
+            }
+            let gw = r * K::grad_factor(r2.sqrt(), c.inv_h, c.alpha);
+            let vab = pa.v - pw.v;
+            f -= pair_term::<T, VISC>(c, pa, pw, r, r2, gw, vab) * (pa.mass * pw.mass);
+        }
+        *out = f;
+    });
+}

@@ -1,0 +1,63 @@
+//! `regolith bench`.
+
+use std::path::Path;
+
+use anyhow::Context;
+
+use super::{BackendArg, BenchModelArg, Failure, Precision};
+use crate::bench::{BenchModel, bench_scene, run_bench};
+use crate::input::InputError;
+use crate::scene;
+
+pub(super) fn run(
+    particles: usize,
+    model: BenchModelArg,
+    backend: BackendArg,
+    precision: Precision,
+    steps: u64,
+    warmup: u64,
+    json: Option<&Path>,
+) -> Result<(), Failure> {
+    if !(1_000..=50_000_000).contains(&particles) {
+        return Err(InputError::flag("--particles", format!("must be in 1000..=50000000 (got {particles})")).into());
+    }
+    if steps == 0 {
+        return Err(InputError::flag("--steps", "must be at least 1").into());
+    }
+    if backend == BackendArg::Wgpu {
+        return Err(InputError::flag("--backend", "wgpu is not available in this build; use cpu").into());
+    }
+    let prec = match precision {
+        Precision::F32 => scene::Precision::F32,
+        Precision::F64 => scene::Precision::F64,
+    };
+    let models = match model {
+        BenchModelArg::Dp => vec![BenchModel::DruckerPrager],
+        BenchModelArg::Mcc => vec![BenchModel::Mcc],
+        BenchModelArg::Both => vec![BenchModel::DruckerPrager, BenchModel::Mcc],
+    };
+    let mut results = Vec::new();
+    for m in models {
+        let scene = bench_scene(particles, m, prec)?;
+        let r = run_bench(&scene, m, warmup, steps).context("bench run failed")?;
+        println!(
+            "bench {:<15} {} {}: {} particles, {} markers, {} steps in {:.2} s: {:.3e} particle-steps/s, {:.3e} neighbour interactions/s ({:.1} neighbours/particle, {} threads)",
+            r.model,
+            r.backend,
+            r.precision,
+            r.particles,
+            r.markers,
+            r.steps,
+            r.seconds,
+            r.particle_steps_per_s,
+            r.interactions_per_s,
+            r.neighbours_per_particle,
+            r.threads
+        );
+        results.push(r);
+    }
+    if let Some(p) = json {
+        crate::run::write_json(p, &results).context("writing bench json")?;
+    }
+    Ok(())
+}

@@ -1,0 +1,75 @@
+//! `regolith run`.
+
+use std::path::Path;
+
+use super::{BackendArg, Failure, Precision};
+use crate::input::InputError;
+use crate::run::{RunOptions, run_scene};
+use crate::scene::{self, Backend, load_scene};
+
+pub(super) fn run(
+    path: &Path,
+    out: &Path,
+    backend: Option<BackendArg>,
+    precision: Option<Precision>,
+    sets: &[(String, toml::Value)],
+    quiet: bool,
+) -> Result<(), Failure> {
+    let mut scene = load_scene(path, sets)?;
+    if let Some(b) = backend {
+        scene.backend = match b {
+            BackendArg::Auto => Backend::Auto,
+            BackendArg::Cpu => Backend::Cpu,
+            BackendArg::Wgpu => Backend::Wgpu,
+        };
+    }
+    if let Some(p) = precision {
+        scene.precision = match p {
+            Precision::F32 => scene::Precision::F32,
+            Precision::F64 => scene::Precision::F64,
+        };
+    }
+    match scene.backend {
+        Backend::Cpu => {}
+        Backend::Auto => {
+            if !quiet {
+                eprintln!("backend auto: no wgpu backend in this build, using cpu");
+            }
+        }
+        Backend::Wgpu => {
+            return Err(InputError::flag("--backend", "wgpu is not available in this build; use cpu or auto").into());
+        }
+    }
+    if !quiet {
+        print!("{}", scene::describe(&scene));
+    }
+    let opts = RunOptions { out: out.to_path_buf(), quiet };
+    let summary = run_scene(&scene, &opts).map_err(|e| {
+        Failure::Run(anyhow::Error::new(e).context(format!(
+            "run of {} failed (outputs written to {})",
+            path.display(),
+            out.display()
+        )))
+    })?;
+    for note in &summary.notes {
+        println!("note: {note}");
+    }
+    println!(
+        "done: {} particles, {} steps to t = {:.4} s in {:.1} s ({:.3e} particle-steps/s); max speed {:.3e} m/s; escaped {}; outputs in {}",
+        summary.particles,
+        summary.steps,
+        summary.sim_time,
+        summary.wall_time_s,
+        summary.particle_steps_per_s,
+        summary.max_speed,
+        summary.escaped_particles,
+        out.display()
+    );
+    if let Some(r) = &summary.runout {
+        println!(
+            "runout: R0 = {:.4} m, a = {:.2}, R∞ = {:.4} m, (R∞ − R0)/R0 = {:.3} (Lube et al. 2004: {:.3})",
+            r.initial_radius, r.aspect_ratio, r.final_radius, r.normalized, r.lube_2004
+        );
+    }
+    Ok(())
+}

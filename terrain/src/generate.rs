@@ -1,0 +1,270 @@
+//! Particles and wall markers for a terrain scene, on one lattice.
+//!
+//! Soil particles and container-wall markers share a cubic lattice of spacing d0 anchored at
+//! the container's lower corner, so the particle distribution is uniform across the wall. The
+//! first marker layer lies on each wall plane, the others behind it; the first soil layer is
+//! one spacing in. Each lattice point stands for a d0³ cell, so the soil's effective boundary
+//! is d0/2 from the wall plane (Chrono's convention for markers on the surface).
+//!
+//! Initial stress is geostatic along gravity's z component: in each lattice column the
+//! vertical stress at a particle is the weight of the soil above it (its own half cell
+//! included), `σv = −Σ ρ |g_z| d0`, and `σh = K0 σv` with the particle's material K0. MCC
+//! points get `p_c0 = OCR · p0` and their specific volume from the compression lines.
+
+use std::collections::{BTreeMap, HashMap};
+
+use regolith_fsi::rheology::{Material, Rheology};
+use regolith_fsi::{MarkerInit, ParticleInit};
+
+use crate::{Aabb, SoilRegion, TerrainError};
+
+/// A region and the index of its material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RegionSpec {
+    /// Where.
+    pub region: SoilRegion,
+    /// Material index.
+    pub material: u16,
+}
+
+/// Everything the solver is built from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TerrainBuild {
+    /// Soil particles.
+    pub particles: Vec<ParticleInit>,
+    /// Wall markers (owner 0).
+    pub markers: Vec<MarkerInit>,
+    /// The container actually used: its size is a whole number of spacings.
+    pub container: Aabb,
+    /// The domain the neighbour grid covers; soil leaving it is escaped.
+    pub domain: ([f64; 3], [f64; 3]),
+    /// Adjustments worth telling the user about.
+    pub notes: Vec<String>,
+}
+
+/// Lattice geometry of a container.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lattice {
+    /// Origin (the container's lower corner), m.
+    pub origin: [f64; 3],
+    /// Spacing d0, m.
+    pub d0: f64,
+    /// Intervals along each axis (the container spans `n · d0`).
+    pub n: [i64; 3],
+}
+
+impl Lattice {
+    /// The lattice of a container, snapped to whole spacings.
+    pub fn of(container: &Aabb, d0: f64) -> Self {
+        let s = container.size();
+        Self { origin: container.min, d0, n: [0, 1, 2].map(|a| ((s[a] / d0).round() as i64).max(4)) }
+    }
+    /// Position of lattice point `(i, j, k)`.
+    pub fn point(&self, c: [i64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|a| self.origin[a] + c[a] as f64 * self.d0)
+    }
+    /// The snapped container.
+    pub fn container(&self) -> Aabb {
+        Aabb { min: self.origin, max: self.point(self.n) }
+    }
+}
+
+/// Lattice indices whose coordinate `c` satisfies `lo < c ≤ hi` (cell-centre ownership).
+fn index_range(origin: f64, d0: f64, lo: f64, hi: f64) -> (i64, i64) {
+    let eps = 1e-9;
+    let first = ((lo - origin) / d0 + eps).floor() as i64 + 1;
+    let last = ((hi - origin) / d0 + eps).floor() as i64;
+    (first, last)
+}
+
+/// Builds soil particles and wall markers.
+pub fn build_terrain(
+    container: &Aabb,
+    spacing: f64,
+    bce_layers: usize,
+    gravity: [f64; 3],
+    regions: &[RegionSpec],
+    materials: &[Material<f64>],
+) -> Result<TerrainBuild, TerrainError> {
+    let lat = Lattice::of(container, spacing);
+    let snapped = lat.container();
+    let mut notes = Vec::new();
+    let moved = (0..3).map(|a| (snapped.max[a] - container.max[a]).abs()).fold(0.0, f64::max);
+    if moved > 1e-9 * spacing {
+        notes.push(format!(
+            "container max snapped from {:?} to {:?} m so that its size is a whole number of spacings",
+            container.max, snapped.max
+        ));
+    }
+    let [nx, ny, nz] = lat.n;
+    let d0 = spacing;
+    // Occupied interior lattice points, first region wins.
+    let mut cells: HashMap<[i64; 3], u16> = HashMap::new();
+    let mut insert = |c: [i64; 3], m: u16| {
+        if c[0] >= 1 && c[0] < nx && c[1] >= 1 && c[1] < ny && c[2] >= 1 && c[2] < nz {
+            cells.entry(c).or_insert(m);
+        }
+    };
+    for spec in regions {
+        if spec.material as usize >= materials.len() {
+            return Err(TerrainError::Setup(format!("material index {} out of range", spec.material)));
+        }
+        match &spec.region {
+            SoilRegion::Bed { surface, .. } => {
+                let size = snapped.size();
+                for i in 1..nx {
+                    for j in 1..ny {
+                        let p = lat.point([i, j, 0]);
+                        let depth =
+                            surface.depth_at((p[0] - snapped.min[0]) / size[0], (p[1] - snapped.min[1]) / size[1]);
+                        let top = (depth / d0).round() as i64;
+                        for k in 1..=top {
+                            insert([i, j, k], spec.material);
+                        }
+                    }
+                }
+            }
+            SoilRegion::Block(b) => {
+                let (i0, i1) = index_range(lat.origin[0], d0, b.min[0], b.max[0]);
+                let (j0, j1) = index_range(lat.origin[1], d0, b.min[1], b.max[1]);
+                let (k0, k1) = index_range(lat.origin[2], d0, b.min[2], b.max[2]);
+                for i in i0..=i1 {
+                    for j in j0..=j1 {
+                        for k in k0..=k1 {
+                            insert([i, j, k], spec.material);
+                        }
+                    }
+                }
+            }
+            SoilRegion::Cylinder { base_center: c, radius, height } => {
+                let (i0, i1) = index_range(lat.origin[0], d0, c[0] - radius - d0, c[0] + radius + d0);
+                let (j0, j1) = index_range(lat.origin[1], d0, c[1] - radius - d0, c[1] + radius + d0);
+                let (k0, k1) = index_range(lat.origin[2], d0, c[2], c[2] + height);
+                for i in i0..=i1 {
+                    for j in j0..=j1 {
+                        let p = lat.point([i, j, 0]);
+                        if (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) <= radius * radius * (1.0 + 1e-12) {
+                            for k in k0..=k1 {
+                                insert([i, j, k], spec.material);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if cells.is_empty() {
+        return Err(TerrainError::Setup(
+            "the soil regions contain no lattice point: make them larger than the spacing".into(),
+        ));
+    }
+    // Geostatic stress, column by column from the top.
+    let mut columns: BTreeMap<(i64, i64), Vec<(i64, u16)>> = BTreeMap::new();
+    for (c, m) in &cells {
+        columns.entry((c[0], c[1])).or_default().push((c[2], *m));
+    }
+    let g = gravity[2].abs();
+    let mut particles = Vec::with_capacity(cells.len());
+    for ((i, j), mut col) in columns {
+        col.sort_unstable_by_key(|c| std::cmp::Reverse(c.0));
+        let mut above = 0.0; // weight per area of the soil above the current particle (Pa)
+        for (k, m) in col {
+            let mat = &materials[m as usize];
+            let half = mat.density * g * 0.5 * d0;
+            let sv = -(above + half);
+            above += 2.0 * half;
+            let sh = mat.k0() * sv;
+            let p0 = -(sv + 2.0 * sh) / 3.0;
+            let st = mat.initial_state(p0);
+            particles.push(ParticleInit {
+                pos: lat.point([i, j, k]),
+                vel: [0.0; 3],
+                rho: mat.density,
+                mass: mat.density * d0 * d0 * d0,
+                sigma: [sh, sh, sv, 0.0, 0.0, 0.0],
+                pc: if matches!(mat.rheology, Rheology::Mcc(_)) { st.pc } else { 0.0 },
+                specific_volume: st.v,
+                material: m,
+            });
+        }
+    }
+    let l = bce_layers as i64;
+    let mut markers = Vec::new();
+    for i in -(l - 1)..=(nx + l - 1) {
+        for j in -(l - 1)..=(ny + l - 1) {
+            for k in -(l - 1)..=nz {
+                if i <= 0 || i >= nx || j <= 0 || j >= ny || k <= 0 {
+                    markers.push(MarkerInit { pos: lat.point([i, j, k]), owner: 0 });
+                }
+            }
+        }
+    }
+    let h_room = snapped.size()[2];
+    let pad = (l as f64 + 3.0) * d0;
+    let domain = (
+        [snapped.min[0] - pad, snapped.min[1] - pad, snapped.min[2] - pad],
+        [snapped.max[0] + pad, snapped.max[1] + pad, snapped.max[2] + h_room + pad],
+    );
+    Ok(TerrainBuild { particles, markers, container: snapped, domain, notes })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Surface;
+    use regolith_fsi::rheology::MaterialParams;
+
+    fn dp() -> Material<f64> {
+        MaterialParams {
+            model: Some(regolith_fsi::rheology::ModelKind::DruckerPrager),
+            density: Some(1600.0),
+            youngs_modulus: Some(1e7),
+            poisson_ratio: Some(0.3),
+            friction_angle: Some(30.0),
+            ..Default::default()
+        }
+        .build()
+        .expect("valid")
+    }
+
+    #[test]
+    fn bed_has_the_right_count_and_geostatic_stress() {
+        let c = Aabb { min: [0.0; 3], max: [0.2, 0.1, 0.2] };
+        let regions =
+            [RegionSpec { region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) }, material: 0 }];
+        let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &regions, &[dp()]).expect("builds");
+        // 19 × 9 interior columns, 10 layers.
+        assert_eq!(b.particles.len(), 19 * 9 * 10);
+        let bottom = b.particles.iter().find(|p| (p.pos[2] - 0.01).abs() < 1e-12).expect("bottom");
+        // 9.5 cells of soil above the bottom particle's centre.
+        assert!((bottom.sigma[2] + 1600.0 * 9.81 * 0.095).abs() < 1e-9);
+        assert!((bottom.sigma[0] / bottom.sigma[2] - 0.5).abs() < 1e-12);
+        // Wall shell: floor and four walls, 3 layers, up to the container top.
+        assert!(b.markers.iter().all(|m| m.pos[2] <= 0.2 + 1e-12 && m.pos[2] >= -0.02 - 1e-12));
+        assert!(b.notes.is_empty());
+    }
+
+    #[test]
+    fn cylinder_and_block_fill_their_volume() {
+        let c = Aabb { min: [0.0; 3], max: [0.6, 0.6, 0.3] };
+        let regions = [RegionSpec {
+            region: SoilRegion::Cylinder { base_center: [0.3, 0.3, 0.0], radius: 0.1, height: 0.1 },
+            material: 0,
+        }];
+        let b = build_terrain(&c, 0.005, 3, [0.0, 0.0, -9.81], &regions, &[dp()]).expect("builds");
+        let expect = std::f64::consts::PI * 0.01 * 0.1 / 0.005f64.powi(3);
+        assert!((b.particles.len() as f64 - expect).abs() / expect < 0.01, "{} vs {expect}", b.particles.len());
+        let top = b.particles.iter().map(|p| p.pos[2]).fold(0.0, f64::max);
+        assert!((top - 0.1).abs() < 1e-9);
+    }
+
+    #[test]
+    fn container_is_snapped_to_whole_spacings_with_a_note() {
+        let c = Aabb { min: [0.0; 3], max: [0.205, 0.1, 0.1] };
+        let regions =
+            [RegionSpec { region: SoilRegion::Block(Aabb { min: [0.0; 3], max: [0.1, 0.1, 0.05] }), material: 0 }];
+        let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &regions, &[dp()]).expect("builds");
+        assert_eq!(b.notes.len(), 1);
+        assert!((b.container.max[0] - 0.2).abs() < 1e-12 || (b.container.max[0] - 0.21).abs() < 1e-12);
+    }
+}
