@@ -134,7 +134,7 @@ case!(
     threshold_range,
     "spacing = 0.02",
     "spacing = 0.02\nfree_surface_threshold = 3.5",
-    "{}:7: key `sph.free_surface_threshold`: must be in (0, 3): Σ(m/ρ)(−r·∇W) is 3 inside the soil (got 3.5)"
+    "{}:7: key `sph.free_surface_threshold`: must be in (0, 1): the smallest eigenvalue of Σ V (x_b − x_a) ⊗ ∇W is 1 inside the soil (got 3.5)"
 );
 case!(
     shifting_unknown,
