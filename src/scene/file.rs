@@ -64,7 +64,15 @@ pub(crate) struct SphFile {
     pub shifting_coefficient: Option<f64>,
     pub free_surface: Option<bool>,
     pub free_surface_threshold: Option<f64>,
+    pub free_surface_stress: Option<FreeSurfaceStressName>,
     pub bce_layers: Option<i64>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum FreeSurfaceStressName {
+    Keep,
+    Zero,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]

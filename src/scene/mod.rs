@@ -41,7 +41,7 @@ mod plan;
 
 use std::path::{Path, PathBuf};
 
-use regolith_fsi::config::{Integrator, KernelKind, Shifting, SolverConfig, TimeStep};
+use regolith_fsi::config::{FreeSurfaceStress, Integrator, KernelKind, Shifting, SolverConfig, TimeStep};
 use regolith_fsi::rheology::{MaterialParams, Rheology};
 use regolith_terrain::{Aabb, Heightmap, SoilRegion, Surface};
 
@@ -50,7 +50,10 @@ pub use plan::describe;
 
 use crate::input::{InputError, parse_toml, read_text};
 use crate::material::{build_material, load_material_file};
-use file::{BackendName, BlockShapeName, IntegratorName, KernelName, PrecisionName, SceneFile, ShiftingName};
+use file::{
+    BackendName, BlockShapeName, FreeSurfaceStressName, IntegratorName, KernelName, PrecisionName, SceneFile,
+    ShiftingName,
+};
 
 /// Which compute backend runs the soil.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -283,6 +286,13 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     if !free_surface && sph.free_surface_threshold.is_some() {
         return Err(e("sph.free_surface_threshold", "is set but free_surface = false".into()));
     }
+    if !free_surface && sph.free_surface_stress.is_some() {
+        return Err(e("sph.free_surface_stress", "is set but free_surface = false".into()));
+    }
+    let free_surface_stress = match sph.free_surface_stress.unwrap_or(FreeSurfaceStressName::Keep) {
+        FreeSurfaceStressName::Keep => FreeSurfaceStress::Keep,
+        FreeSurfaceStressName::Zero => FreeSurfaceStress::Zero,
+    };
     let bce_layers = sph.bce_layers.unwrap_or(3);
     if !(1..=8).contains(&bce_layers) {
         return Err(e("sph.bce_layers", format!("must be an integer in 1..=8 (got {bce_layers})")));
@@ -302,6 +312,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         xsph_epsilon,
         shifting_coefficient,
         free_surface_threshold: free_surface.then_some(threshold),
+        free_surface_stress,
         gravity,
         bce_layers: bce_layers as usize,
     };
@@ -445,7 +456,9 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
                     b.min.ok_or_else(|| e(&k("min"), "is required for a box: lower corner [x, y, z] in m".into()))?;
                 let max =
                     b.max.ok_or_else(|| e(&k("max"), "is required for a box: upper corner [x, y, z] in m".into()))?;
-                if (0..3).any(|a| !min[a].is_finite() || !max[a].is_finite() || max[a] - min[a] < spacing) {
+                if (0..3)
+                    .any(|a| !min[a].is_finite() || !max[a].is_finite() || max[a] - min[a] < spacing * (1.0 - 1e-9))
+                {
                     return Err(e(
                         &k("max"),
                         format!("must exceed min by at least sph.spacing = {spacing} m along each axis"),
@@ -467,10 +480,10 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
                 })?;
                 let radius = b.radius.ok_or_else(|| e(&k("radius"), "is required for a cylinder (m)".into()))?;
                 let height = b.height.ok_or_else(|| e(&k("height"), "is required for a cylinder (m)".into()))?;
-                if !(radius.is_finite() && radius >= spacing) {
+                if !(radius.is_finite() && radius >= spacing * (1.0 - 1e-9)) {
                     return Err(e(&k("radius"), format!("must be ≥ sph.spacing = {spacing} m (got {radius})")));
                 }
-                if !(height.is_finite() && height >= spacing) {
+                if !(height.is_finite() && height >= spacing * (1.0 - 1e-9)) {
                     return Err(e(&k("height"), format!("must be ≥ sph.spacing = {spacing} m (got {height})")));
                 }
                 SoilRegion::Cylinder { base_center, radius, height }

@@ -146,7 +146,13 @@ pub fn describe(scene: &Scene) -> String {
         models.join(", "),
         if hardening { "on" } else { "off" },
         match sv.free_surface_threshold {
-            Some(t) => format!("on (threshold {t})"),
+            Some(t) => format!(
+                "on (threshold {t}, surface stress {})",
+                match sv.free_surface_stress {
+                    regolith_fsi::config::FreeSurfaceStress::Keep => "kept",
+                    regolith_fsi::config::FreeSurfaceStress::Zero => "zeroed",
+                }
+            ),
             None => "off".into(),
         },
         if sv.artificial_viscosity > 0.0 { "on" } else { "off" }

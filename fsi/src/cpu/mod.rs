@@ -22,7 +22,7 @@ pub use grid::GridSpec;
 use rayon::prelude::*;
 
 use crate::Real;
-use crate::config::{Integrator, KernelKind, SolverConfig, TimeStep};
+use crate::config::{DETACHED_THRESHOLD, FreeSurfaceStress, Integrator, KernelKind, SolverConfig, TimeStep};
 use crate::kernel::{CubicSpline, Kernel, WendlandC2};
 use crate::math::{Sym3, Vec3};
 use crate::particles::{MarkerInit, ParticleInit, SolverError, StepReport};
@@ -71,6 +71,7 @@ pub struct CpuSph<T: Real> {
     mass: Vec<T>,
     id: Vec<u32>,
     free_surface: Vec<bool>,
+    detached: Vec<bool>,
     active: usize,
     // Midpoint stage.
     s_pos: Vec<Vec3<T>>,
@@ -185,6 +186,7 @@ impl<T: Real> CpuSph<T> {
             mass: particles.iter().map(|p| T::of(p.mass)).collect(),
             id: (0..n as u32).collect(),
             free_surface: vec![false; n],
+            detached: vec![false; n],
             active: n,
             s_pos: vec![Vec3::zero(); n],
             s_vel: vec![Vec3::zero(); n],
@@ -293,6 +295,11 @@ impl<T: Real> CpuSph<T> {
     pub fn free_surface(&self) -> &[bool] {
         &self.free_surface
     }
+    /// Detached flags of the last step (see [`crate::config::DETACHED_THRESHOLD`]): these
+    /// particles carry no stress.
+    pub fn detached(&self) -> &[bool] {
+        &self.detached
+    }
     /// Free-surface indicator of the last step's first stage: the smallest eigenvalue of
     /// `Σ V_b (x_b − x_a) ⊗ ∇W_ab` (1 in the bulk, about 0.5 in a flat top layer).
     pub fn free_surface_measure(&self) -> Vec<T> {
@@ -367,6 +374,7 @@ impl<T: Real> CpuSph<T> {
         perm!(self.mass, s.t);
         perm!(self.id, s.u32);
         perm!(self.free_surface, s.b);
+        perm!(self.detached, s.b);
         self.active = self.soil_sort.inside();
 
         // Markers: fixed walls are sorted once; bodies re-sort when their kinematics change.
@@ -490,14 +498,18 @@ impl<T: Real> CpuSph<T> {
         let rk2 = self.cfg.integrator == Integrator::Rk2;
         self.evaluate(false, !rk2);
         let n = self.active;
-        if let Some(th) = self.cfg.free_surface_threshold {
+        {
             // A particle with wall or body markers in its support is in contact, not free: it
             // keeps its stress, so that it resists penetration and carries basal friction.
-            let th = T::of(th);
+            let th = T::of(self.cfg.free_surface_threshold.unwrap_or(0.0));
+            let detach = T::of(DETACHED_THRESHOLD);
             let nl_sm = &self.nl_sm;
-            self.free_surface[..n].par_iter_mut().zip(self.rates[..n].par_iter()).enumerate().for_each(
-                |(i, (f, r))| {
-                    *f = r.fs < th && nl_sm.of(i).is_empty();
+            let rates = &self.rates[..n];
+            self.free_surface[..n].par_iter_mut().zip(self.detached[..n].par_iter_mut()).enumerate().for_each(
+                |(i, (f, d))| {
+                    let free = nl_sm.of(i).is_empty();
+                    *f = free && rates[i].fs < th;
+                    *d = free && rates[i].fs < detach;
                 },
             );
         }
@@ -550,9 +562,10 @@ impl<T: Real> CpuSph<T> {
         let materials = &self.materials;
         let rates = &self.rates[..n];
         let fsf = &self.free_surface[..n];
+        let det = &self.detached[..n];
+        let zero_surface = self.cfg.free_surface_stress == FreeSurfaceStress::Zero;
         let mats = &self.material[..n];
         let ids = &self.id[..n];
-        let fs_on = self.cfg.free_surface_threshold.is_some();
         let err_rheo = |i: usize, source: RheologyError| SolverError::Rheology { step, time, particle: ids[i], source };
         if to_stage {
             let (pos, vel, rho, sigma, state) =
@@ -568,8 +581,15 @@ impl<T: Real> CpuSph<T> {
                     *sv = vel[i] + r.acc * h;
                     *sp = pos[i] + (vel[i] + r.xsph * eps) * h;
                     *sr = rho[i] + r.drho * h;
-                    let (s, st) = correct(&materials[mats[i] as usize], &sigma[i], &state[i], r, h, fs_on && fsf[i])
-                        .map_err(|e| err_rheo(i, e))?;
+                    let (s, st) = correct(
+                        &materials[mats[i] as usize],
+                        &sigma[i],
+                        &state[i],
+                        r,
+                        h,
+                        det[i] || (zero_surface && fsf[i]),
+                    )
+                    .map_err(|e| err_rheo(i, e))?;
                     *ss = s;
                     *sst = st;
                     Ok(())
@@ -598,8 +618,9 @@ impl<T: Real> CpuSph<T> {
                     }
                     *p += dx;
                     *rh += r.drho * h;
-                    let (s_new, st_new) = correct(&materials[mats[i] as usize], s, st, r, h, fs_on && fsf[i])
-                        .map_err(|e| err_rheo(i, e))?;
+                    let (s_new, st_new) =
+                        correct(&materials[mats[i] as usize], s, st, r, h, det[i] || (zero_surface && fsf[i]))
+                            .map_err(|e| err_rheo(i, e))?;
                     *s = s_new;
                     *st = st_new;
                     if !p.is_finite() {
@@ -618,7 +639,8 @@ impl<T: Real> CpuSph<T> {
 }
 
 /// Stress update with the plastic correction: `σ + dt σ̇` corrected by the material, state from
-/// the start of the step; free-surface particles carry no stress and do not harden.
+/// the start of the step; stress-free particles (detached, or on the surface in the `Zero`
+/// mode) carry no stress and do not harden.
 #[inline]
 fn correct<T: Real>(
     mat: &Material<T>,
@@ -626,10 +648,10 @@ fn correct<T: Real>(
     state: &PointState<T>,
     r: &Rate<T>,
     dt: T,
-    free_surface: bool,
+    stress_free: bool,
 ) -> Result<(Sym3<T>, PointState<T>), RheologyError> {
     let mut st = *state;
-    let s = if free_surface {
+    let s = if stress_free {
         Sym3::zero()
     } else {
         let trial = *sigma + r.dsigma * dt;

@@ -1,0 +1,111 @@
+//! A bed at rest under gravity keeps its geostatic state: σv = ρ g depth and σh = K0 σv, the
+//! soil does not move and nothing leaves the container.
+
+mod common;
+
+use regolith::fsi::Real;
+use regolith::run::build_soil;
+
+fn bed(model: &str, precision: &str, kernel: &str) -> String {
+    let material = match model {
+        "mcc" => "model = \"mcc\"\nmcc_m = 1.2\nmcc_kappa = 0.02\nmcc_lambda = 0.1\nmcc_v_lambda = 2.4\nocr = 2.0\n",
+        _ => "model = \"drucker-prager\"\nfriction_angle = 32.0\n",
+    };
+    format!(
+        "[simulation]\nend_time = 0.15\nprecision = \"{precision}\"\n\n[sph]\nspacing = 0.02\nkernel = \"{kernel}\"\n\n\
+         [[materials]]\nname = \"soil\"\ndensity = 1800\nyoungs_modulus = 2e7\npoisson_ratio = 0.3\n{material}\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.3, 0.3, 0.3]\n\n[terrain]\nmaterial = \"soil\"\ndepth = 0.24\n"
+    )
+}
+
+struct Outcome {
+    sigma_v: f64,
+    expected_v: f64,
+    k_ratio: f64,
+    k0: f64,
+    max_speed: f64,
+    speed_scale: f64,
+    escaped: usize,
+}
+
+fn settle<T: Real>(text: &str) -> Outcome {
+    let scene = common::scene(text);
+    let mut m = build_soil::<T>(&scene).expect("builds");
+    let mut max_speed = 0.0;
+    while m.solver.time() < scene.end_time {
+        max_speed = m.solver.step(Some(scene.end_time - m.solver.time())).expect("step").max_speed;
+    }
+    let s = &m.solver;
+    let n = s.active();
+    let d0 = scene.solver.spacing;
+    let pos: Vec<[f64; 3]> = s.positions()[..n].iter().map(|p| p.as_f64()).collect();
+    let top = pos.iter().map(|p| p[2]).fold(f64::MIN, f64::max) + 0.5 * d0;
+    let depth_total = top - 0.5 * d0;
+    // Central columns (three spacings from the walls), the layer nearest mid-depth.
+    // The lattice layer nearest mid-depth of the soil, which spans [d0/2, top].
+    let mid_z = ((0.5 * d0 + 0.5 * depth_total) / d0).round() * d0;
+    let (mut sv, mut sh, mut count, mut z_sum) = (0.0, 0.0, 0.0, 0.0);
+    for (i, p) in pos.iter().enumerate() {
+        let central = p[0] > 3.0 * d0 && p[0] < 0.3 - 3.0 * d0 && p[1] > 3.0 * d0 && p[1] < 0.3 - 3.0 * d0;
+        if central && (p[2] - mid_z).abs() < 0.25 * d0 {
+            let sig = s.stresses()[i].as_f64();
+            sv += -sig[2];
+            sh += -0.5 * (sig[0] + sig[1]);
+            z_sum += p[2];
+            count += 1.0;
+        }
+    }
+    assert!(count > 10.0, "no particles at mid-depth");
+    let rho = s.materials()[0].density.as_f64();
+    let g = 9.81;
+    let depth = top - z_sum / count;
+    Outcome {
+        sigma_v: sv / count,
+        expected_v: rho * g * depth,
+        k_ratio: sh / sv,
+        k0: s.materials()[0].k0().as_f64(),
+        max_speed,
+        speed_scale: (g * depth_total).sqrt(),
+        escaped: s.len() - s.active(),
+    }
+}
+
+fn check(o: Outcome, what: &str) {
+    let ev = (o.sigma_v - o.expected_v).abs() / o.expected_v;
+    assert!(ev < 0.03, "{what}: σv = {:.1} Pa vs ρ g depth = {:.1} Pa ({:.2} %)", o.sigma_v, o.expected_v, 100.0 * ev);
+    let ek = (o.k_ratio - o.k0).abs() / o.k0;
+    assert!(ek < 0.10, "{what}: σh/σv = {:.3} vs K0 = {:.3}", o.k_ratio, o.k0);
+    assert!(
+        o.max_speed < 0.01 * o.speed_scale,
+        "{what}: max speed {:.3e} m/s ≥ 1 % of sqrt(g depth) = {:.3e}",
+        o.max_speed,
+        o.speed_scale
+    );
+    assert_eq!(o.escaped, 0, "{what}: particles escaped");
+    eprintln!(
+        "{what}: σv error {:.2} %, K error {:.2} %, max speed / sqrt(g d) = {:.2e}",
+        100.0 * ev,
+        100.0 * ek,
+        o.max_speed / o.speed_scale
+    );
+}
+
+#[test]
+fn mcc_bed_stays_geostatic_f64_wendland() {
+    check(settle::<f64>(&bed("mcc", "f64", "wendland")), "mcc f64 wendland");
+}
+
+#[test]
+fn dp_bed_stays_geostatic_f32_cubic() {
+    check(settle::<f32>(&bed("dp", "f32", "cubic")), "dp f32 cubic");
+}
+
+#[test]
+fn mcc_bed_stays_geostatic_f32_wendland() {
+    check(settle::<f32>(&bed("mcc", "f32", "wendland")), "mcc f32 wendland");
+}
+
+#[test]
+fn dp_bed_stays_geostatic_f64_wendland() {
+    check(settle::<f64>(&bed("dp", "f64", "wendland")), "dp f64 wendland");
+}
