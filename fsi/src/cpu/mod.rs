@@ -116,17 +116,27 @@ pub struct CpuSph<T: Real> {
     marker_impulse: [f64; 3],
 }
 
+/// Calls a rate function instantiated for the effects that are on: each combination is its
+/// own monomorphised loop, so an effect that is off costs nothing per pair.
 macro_rules! dispatch_effects {
-    ($visc:expr, $xsph:expr, $ppst:expr, $f:ident :: <$t:ty, $k:ty> ($($arg:expr),* $(,)?)) => {
-        match ($visc, $xsph, $ppst) {
-            (true, true, true) => $f::<$t, $k, true, true, true>($($arg),*),
-            (true, true, false) => $f::<$t, $k, true, true, false>($($arg),*),
-            (true, false, true) => $f::<$t, $k, true, false, true>($($arg),*),
-            (true, false, false) => $f::<$t, $k, true, false, false>($($arg),*),
-            (false, true, true) => $f::<$t, $k, false, true, true>($($arg),*),
-            (false, true, false) => $f::<$t, $k, false, true, false>($($arg),*),
-            (false, false, true) => $f::<$t, $k, false, false, true>($($arg),*),
-            (false, false, false) => $f::<$t, $k, false, false, false>($($arg),*),
+    ($visc:expr, $xsph:expr, $ppst:expr, $fs:expr, $f:ident :: <$t:ty, $k:ty> ($($arg:expr),* $(,)?)) => {
+        match ($visc, $xsph, $ppst, $fs) {
+            (true, true, true, true) => $f::<$t, $k, true, true, true, true>($($arg),*),
+            (true, true, false, true) => $f::<$t, $k, true, true, false, true>($($arg),*),
+            (true, false, true, true) => $f::<$t, $k, true, false, true, true>($($arg),*),
+            (true, false, false, true) => $f::<$t, $k, true, false, false, true>($($arg),*),
+            (false, true, true, true) => $f::<$t, $k, false, true, true, true>($($arg),*),
+            (false, true, false, true) => $f::<$t, $k, false, true, false, true>($($arg),*),
+            (false, false, true, true) => $f::<$t, $k, false, false, true, true>($($arg),*),
+            (false, false, false, true) => $f::<$t, $k, false, false, false, true>($($arg),*),
+            (true, true, true, false) => $f::<$t, $k, true, true, true, false>($($arg),*),
+            (true, true, false, false) => $f::<$t, $k, true, true, false, false>($($arg),*),
+            (true, false, true, false) => $f::<$t, $k, true, false, true, false>($($arg),*),
+            (true, false, false, false) => $f::<$t, $k, true, false, false, false>($($arg),*),
+            (false, true, true, false) => $f::<$t, $k, false, true, true, false>($($arg),*),
+            (false, true, false, false) => $f::<$t, $k, false, true, false, false>($($arg),*),
+            (false, false, true, false) => $f::<$t, $k, false, false, true, false>($($arg),*),
+            (false, false, false, false) => $f::<$t, $k, false, false, false, false>($($arg),*),
         }
     };
 }
@@ -154,7 +164,7 @@ impl<T: Real> CpuSph<T> {
             return Err(SolverError::Setup("too many particles".into()));
         }
         let h = cfg.h();
-        let grid = GridSpec::covering(domain.0, domain.1, 2.0 * h);
+        let grid = GridSpec::covering(domain.0, domain.1, h);
         let n = particles.len();
         let ref_rho = materials.iter().map(|m| m.density.as_f64()).fold(0.0, f64::max);
         let ref_cs = materials.iter().map(|m| m.wave_speed().as_f64()).fold(0.0, f64::max);
@@ -441,6 +451,7 @@ impl<T: Real> CpuSph<T> {
             visc,
             xsph,
             ppst,
+            !from_stage,
             soil_rates::<T, K>(
                 &c,
                 &self.packed[..n],

@@ -47,6 +47,8 @@ impl NeighborList {
         same_set: bool,
     ) {
         let r2 = radius * radius;
+        // Cells to scan on each side: the radius over the cell edge, rounded up.
+        let reach = (radius.as_f64() / idx.cell().as_f64() - 1e-9).ceil().max(1.0) as usize;
         let n = queries.len();
         let chunks = n.div_ceil(CHUNK);
         self.chunk_counts.resize_with(chunks, Vec::new);
@@ -61,12 +63,12 @@ impl NeighborList {
                 for (i, &p) in queries.iter().enumerate().take(hi).skip(lo) {
                     let before = list.len();
                     if let Some(c) = idx.coords(p) {
-                        let x0 = c[0].saturating_sub(1);
-                        let x1 = (c[0] + 1).min(dims[0] - 1);
-                        let y0 = c[1].saturating_sub(1);
-                        let y1 = (c[1] + 1).min(dims[1] - 1);
-                        let z0 = c[2].saturating_sub(1);
-                        let z1 = (c[2] + 1).min(dims[2] - 1);
+                        let x0 = c[0].saturating_sub(reach);
+                        let x1 = (c[0] + reach).min(dims[0] - 1);
+                        let y0 = c[1].saturating_sub(reach);
+                        let y1 = (c[1] + reach).min(dims[1] - 1);
+                        let z0 = c[2].saturating_sub(reach);
+                        let z1 = (c[2] + reach).min(dims[2] - 1);
                         for ix in x0..=x1 {
                             for iy in y0..=y1 {
                                 let a = sort.start[idx.linear([ix, iy, z0])] as usize;

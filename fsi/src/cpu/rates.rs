@@ -192,9 +192,17 @@ fn pair_term<T: Real, const VISC: bool>(
     ga
 }
 
-/// Soil rates for all particles. `XSPH` and `PPST` select the optional sums at compile time.
+/// Soil rates for all particles. `XSPH` and `PPST` select the optional sums at compile time;
+/// `FS` adds the free-surface moment matrix (needed at the first stage of a step only).
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn soil_rates<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: bool, const PPST: bool>(
+pub(crate) fn soil_rates<
+    T: Real,
+    K: Kernel<T>,
+    const VISC: bool,
+    const XSPH: bool,
+    const PPST: bool,
+    const FS: bool,
+>(
     c: &PairConsts<T>,
     soil: &[Packed<T>],
     markers: &[Packed<T>],
@@ -233,9 +241,12 @@ pub(crate) fn soil_rates<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: bo
                 l.m[i][1] += vi * gw.y;
                 l.m[i][2] += vi * gw.z;
             }
-            // (x_b − x_a) ⊗ ∇W = −F r ⊗ r: symmetric for a radial kernel.
-            let k = -pb.vol * f;
-            fs += Sym3::new(k * r.x * r.x, k * r.y * r.y, k * r.z * r.z, k * r.x * r.y, k * r.x * r.z, k * r.y * r.z);
+            if FS {
+                // (x_b − x_a) ⊗ ∇W = −F r ⊗ r: symmetric for a radial kernel.
+                let k = -pb.vol * f;
+                fs +=
+                    Sym3::new(k * r.x * r.x, k * r.y * r.y, k * r.z * r.z, k * r.x * r.y, k * r.x * r.z, k * r.y * r.z);
+            }
             if XSPH && is_soil {
                 let w = K::w(rr, c.inv_h, c.alpha);
                 xs -= vab * (T::of(2.0) * pb.mass / (pa.rho + pb.rho) * w);
@@ -258,7 +269,9 @@ pub(crate) fn soil_rates<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: bo
         out.dsigma = jaumann_rate(&sigma[a], &d, spin, out.moduli);
         out.xsph = xs;
         out.grad_c = gc;
-        out.fs = fs.min_eigenvalue();
+        if FS {
+            out.fs = fs.min_eigenvalue();
+        }
     });
 }
 
