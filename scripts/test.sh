@@ -7,8 +7,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 have_vulkan() {
-    ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1 &&
-        { ldconfig -p 2>/dev/null | grep -q 'libvulkan\.so\.1'; }
+    local icd=no
+    for f in /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json; do
+        [ -e "$f" ] && icd=yes
+    done
+    [ "$icd" = yes ] && { ldconfig -p 2>/dev/null | grep -q 'libvulkan\.so\.1'; }
 }
 
 if ! have_vulkan; then

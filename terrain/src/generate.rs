@@ -259,6 +259,37 @@ mod tests {
     }
 
     #[test]
+    fn layered_materials_carry_the_weight_of_each_layer() {
+        let light = dp();
+        let mut heavy = dp();
+        heavy.density = 2400.0;
+        let c = Aabb { min: [0.0; 3], max: [0.1, 0.1, 0.3] };
+        // Heavy bed 0.1 m deep, light block 0.1 m on top of it.
+        let regions = [
+            RegionSpec { region: SoilRegion::Block(Aabb { min: [0.0, 0.0, 0.1], max: [0.1, 0.1, 0.2] }), material: 1 },
+            RegionSpec { region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) }, material: 0 },
+        ];
+        let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &regions, &[heavy, light]).expect("builds");
+        let at = |z: f64| {
+            b.particles
+                .iter()
+                .find(|p| {
+                    (p.pos[2] - z).abs() < 1e-9 && (p.pos[0] - 0.05).abs() < 1e-9 && (p.pos[1] - 0.05).abs() < 1e-9
+                })
+                .copied()
+                .expect("particle")
+        };
+        // Top of the light block: half a cell of light soil.
+        assert!((at(0.2).sigma[2] + 1600.0 * 9.81 * 0.005).abs() < 1e-9);
+        assert_eq!(at(0.2).material, 1);
+        // Bottom particle: 10 cells of light soil and 9.5 of heavy soil above its centre.
+        let expect = 1600.0 * 9.81 * 0.1 + 2400.0 * 9.81 * 0.095;
+        assert!((at(0.01).sigma[2] + expect).abs() < 1e-9, "{}", at(0.01).sigma[2]);
+        assert_eq!(at(0.01).material, 0);
+        assert!((at(0.01).mass - 2400.0 * 1e-6).abs() < 1e-15);
+    }
+
+    #[test]
     fn container_is_snapped_to_whole_spacings_with_a_note() {
         let c = Aabb { min: [0.0; 3], max: [0.205, 0.1, 0.1] };
         let regions =
