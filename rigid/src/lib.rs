@@ -1,9 +1,25 @@
 //! # regolith-rigid
 //!
-//! Will own the rapier3d world of a Regolith simulation (Z up, gravity from the scene): rigid
-//! bodies built from shapes with mass or density, fixed bodies, prescribed (kinematic) motion,
-//! revolute and prismatic joints with velocity motors, external force and torque applied at the
-//! centre of mass every step (and reset every step, since rapier keeps forces until
-//! `reset_forces`), and reading body poses, velocities and accelerations.
-//!
-//! Nothing here yet: the crate is filled by the rigid-coupling work.
+//! A thin owner of the rapier3d world of a Regolith simulation (Z up, gravity from the scene,
+//! SI units, `f64` in the interface, rapier's `f32` inside): rigid bodies built from shapes
+//! with a mass or a density, fixed bodies, prescribed (kinematic) motion by velocity or by
+//! waypoints, revolute and prismatic joints with velocity motors, an external force and torque
+//! applied at the centre of mass each step (and reset every step, since rapier keeps forces
+//! until `reset_forces`), and body states with positions, velocities and accelerations.
+#![warn(missing_docs)]
+
+mod shape;
+mod world;
+
+pub use shape::{Axis, Grousers, Pose, ShapeDesc, quat_mul, quat_rotate};
+pub use world::{
+    BodyDesc, BodyId, BodyState, JointDesc, JointId, JointKind, MassSpec, Motion, RigidWorld, VelocityMotor,
+};
+
+/// Errors of the rigid world.
+#[derive(Debug, thiserror::Error)]
+pub enum RigidError {
+    /// A body or joint description is invalid.
+    #[error("{0}")]
+    Invalid(String),
+}

@@ -1,0 +1,260 @@
+//! Body shapes, in the body frame (m). The same description builds the rapier collider and,
+//! in `regolith-coupling`, the body's BCE markers.
+
+/// A body-frame axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Axis {
+    /// x.
+    X,
+    /// y.
+    Y,
+    /// z.
+    Z,
+}
+
+impl Axis {
+    /// Unit vector.
+    pub fn unit(self) -> [f64; 3] {
+        match self {
+            Self::X => [1.0, 0.0, 0.0],
+            Self::Y => [0.0, 1.0, 0.0],
+            Self::Z => [0.0, 0.0, 1.0],
+        }
+    }
+}
+
+/// A rigid transform: translation (m) and rotation as a unit quaternion `[x, y, z, w]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// Translation (m).
+    pub translation: [f64; 3],
+    /// Unit quaternion `[x, y, z, w]`.
+    pub rotation: [f64; 4],
+}
+
+impl Default for Pose {
+    fn default() -> Self {
+        Self { translation: [0.0; 3], rotation: [0.0, 0.0, 0.0, 1.0] }
+    }
+}
+
+impl Pose {
+    /// A pure translation.
+    pub fn translation(t: [f64; 3]) -> Self {
+        Self { translation: t, ..Default::default() }
+    }
+    /// From a translation and roll, pitch, yaw (degrees, applied as R = Rz(yaw) Ry(pitch) Rx(roll)).
+    pub fn from_rpy_deg(t: [f64; 3], rpy_deg: [f64; 3]) -> Self {
+        let [r, p, y] = rpy_deg.map(|a| a.to_radians() * 0.5);
+        let (sr, cr) = r.sin_cos();
+        let (sp, cp) = p.sin_cos();
+        let (sy, cy) = y.sin_cos();
+        let q = [
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+            cr * cp * cy + sr * sp * sy,
+        ];
+        Self { translation: t, rotation: q }
+    }
+    /// Rotates a vector.
+    pub fn rotate(&self, v: [f64; 3]) -> [f64; 3] {
+        quat_rotate(self.rotation, v)
+    }
+    /// Transforms a point.
+    pub fn apply(&self, p: [f64; 3]) -> [f64; 3] {
+        let r = self.rotate(p);
+        [r[0] + self.translation[0], r[1] + self.translation[1], r[2] + self.translation[2]]
+    }
+    /// `self ∘ other` (apply `other` first).
+    pub fn compose(&self, other: &Pose) -> Pose {
+        Pose { translation: self.apply(other.translation), rotation: quat_mul(self.rotation, other.rotation) }
+    }
+}
+
+/// Rotates `v` by the unit quaternion `q = [x, y, z, w]`.
+pub fn quat_rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
+    let [x, y, z, w] = q;
+    // t = 2 q_v × v; v' = v + w t + q_v × t
+    let t = [2.0 * (y * v[2] - z * v[1]), 2.0 * (z * v[0] - x * v[2]), 2.0 * (x * v[1] - y * v[0])];
+    [
+        v[0] + w * t[0] + (y * t[2] - z * t[1]),
+        v[1] + w * t[1] + (z * t[0] - x * t[2]),
+        v[2] + w * t[2] + (x * t[1] - y * t[0]),
+    ]
+}
+
+/// Hamilton product `a b`.
+pub fn quat_mul(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    let [ax, ay, az, aw] = a;
+    let [bx, by, bz, bw] = b;
+    [
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    ]
+}
+
+/// A grouser layout on a wheel: plates running across the tread.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grousers {
+    /// Number of plates, evenly spaced around the rim.
+    pub count: u32,
+    /// Radial height above the rim (m).
+    pub height: f64,
+    /// Thickness in the rolling direction (m).
+    pub thickness: f64,
+}
+
+/// A body shape in its body frame (origin at the shape's centre).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ShapeDesc {
+    /// A box of full sizes `size` (m).
+    Box {
+        /// Full edge lengths (m).
+        size: [f64; 3],
+    },
+    /// A ball.
+    Sphere {
+        /// Radius (m).
+        radius: f64,
+    },
+    /// A solid cylinder centred at the origin.
+    Cylinder {
+        /// Radius (m).
+        radius: f64,
+        /// Length along the axis (m).
+        length: f64,
+        /// Axis.
+        axis: Axis,
+    },
+    /// A solid cone with its axis along z, apex pointing down (−z), centred at half height:
+    /// apex at z = −height/2, base at z = +height/2. A penetrometer tip.
+    Cone {
+        /// Base radius (m).
+        radius: f64,
+        /// Height (m).
+        height: f64,
+    },
+    /// A closed triangle mesh (m, body frame).
+    Mesh {
+        /// Vertices.
+        vertices: Vec<[f64; 3]>,
+        /// Triangles (counter-clockwise seen from outside).
+        indices: Vec<[u32; 3]>,
+    },
+    /// A wheel: a cylinder along y with optional grousers.
+    Wheel {
+        /// Rim radius (m).
+        radius: f64,
+        /// Width along y (m).
+        width: f64,
+        /// Grousers, if any.
+        grousers: Option<Grousers>,
+    },
+    /// Several shapes, each at a pose in the body frame.
+    Compound(Vec<(Pose, ShapeDesc)>),
+}
+
+impl ShapeDesc {
+    /// Volume (m³), for density-specified bodies and reports. Mesh volume by the divergence
+    /// theorem; compounds sum their parts (overlaps counted twice).
+    pub fn volume(&self) -> f64 {
+        use std::f64::consts::PI;
+        match self {
+            Self::Box { size } => size[0] * size[1] * size[2],
+            Self::Sphere { radius } => 4.0 / 3.0 * PI * radius.powi(3),
+            Self::Cylinder { radius, length, .. } => PI * radius * radius * length,
+            Self::Cone { radius, height } => PI * radius * radius * height / 3.0,
+            Self::Mesh { vertices, indices } => {
+                let mut v = 0.0;
+                for t in indices {
+                    let [a, b, c] = t.map(|i| vertices[i as usize]);
+                    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                        + a[2] * (b[0] * c[1] - b[1] * c[0]);
+                }
+                (v / 6.0).abs()
+            }
+            Self::Wheel { radius, width, grousers } => {
+                let rim = PI * radius * radius * width;
+                rim + grousers.map_or(0.0, |g| g.count as f64 * g.height * g.thickness * width)
+            }
+            Self::Compound(parts) => parts.iter().map(|(_, s)| s.volume()).sum(),
+        }
+    }
+
+    /// Radius of a sphere about the body origin that contains the shape (m).
+    pub fn bounding_radius(&self) -> f64 {
+        match self {
+            Self::Box { size } => 0.5 * (size[0] * size[0] + size[1] * size[1] + size[2] * size[2]).sqrt(),
+            Self::Sphere { radius } => *radius,
+            Self::Cylinder { radius, length, .. } => (radius * radius + 0.25 * length * length).sqrt(),
+            Self::Cone { radius, height } => (radius * radius + 0.25 * height * height).sqrt(),
+            Self::Mesh { vertices, .. } => {
+                vertices.iter().map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).fold(0.0, f64::max)
+            }
+            Self::Wheel { radius, width, grousers } => {
+                let r = radius + grousers.map_or(0.0, |g| g.height);
+                (r * r + 0.25 * width * width).sqrt()
+            }
+            Self::Compound(parts) => parts
+                .iter()
+                .map(|(p, s)| {
+                    let t = p.translation;
+                    (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt() + s.bounding_radius()
+                })
+                .fold(0.0, f64::max),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rpy_rotates_as_documented() {
+        let p = Pose::from_rpy_deg([0.0; 3], [0.0, 0.0, 90.0]);
+        let v = p.rotate([1.0, 0.0, 0.0]);
+        assert!((v[0]).abs() < 1e-12 && (v[1] - 1.0).abs() < 1e-12);
+        let p = Pose::from_rpy_deg([0.0; 3], [90.0, 0.0, 0.0]);
+        let v = p.rotate([0.0, 1.0, 0.0]);
+        assert!((v[2] - 1.0).abs() < 1e-12);
+        let p = Pose::from_rpy_deg([0.0; 3], [0.0, 90.0, 0.0]);
+        let v = p.rotate([0.0, 0.0, 1.0]);
+        assert!((v[0] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn volumes() {
+        let cube = ShapeDesc::Mesh {
+            vertices: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 1.0],
+                [1.0, 1.0, 1.0],
+                [0.0, 1.0, 1.0],
+            ],
+            indices: vec![
+                [0, 2, 1],
+                [0, 3, 2],
+                [4, 5, 6],
+                [4, 6, 7],
+                [0, 1, 5],
+                [0, 5, 4],
+                [1, 2, 6],
+                [1, 6, 5],
+                [2, 3, 7],
+                [2, 7, 6],
+                [3, 0, 4],
+                [3, 4, 7],
+            ],
+        };
+        assert!((cube.volume() - 1.0).abs() < 1e-12);
+        assert!((ShapeDesc::Box { size: [1.0, 2.0, 3.0] }.volume() - 6.0).abs() < 1e-12);
+    }
+}

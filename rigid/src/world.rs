@@ -1,0 +1,537 @@
+//! The rapier world of a simulation.
+
+use rapier3d::prelude::*;
+
+use crate::RigidError;
+use crate::shape::{Axis, Pose, ShapeDesc, quat_rotate};
+
+/// How a body's mass is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MassSpec {
+    /// Total mass (kg).
+    Mass(f64),
+    /// Uniform density (kg/m³).
+    Density(f64),
+}
+
+/// How a body moves.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Motion {
+    /// Dynamic: gravity, contacts, joints and applied wrenches move it.
+    Free,
+    /// Never moves.
+    Fixed,
+    /// Kinematic with a prescribed world velocity (changeable between steps).
+    Prescribed {
+        /// Linear velocity of the centre of mass (m/s).
+        linvel: [f64; 3],
+        /// Angular velocity (rad/s).
+        angvel: [f64; 3],
+    },
+    /// Kinematic following a piecewise-linear path of body-origin positions `(t, [x, y, z])`,
+    /// held at the last waypoint afterwards.
+    Waypoints(Vec<(f64, [f64; 3])>),
+}
+
+/// Everything needed to add a body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyDesc {
+    /// Name (unique).
+    pub name: String,
+    /// Shape in the body frame.
+    pub shape: ShapeDesc,
+    /// Mass or density.
+    pub mass: MassSpec,
+    /// Initial pose of the body frame (world).
+    pub pose: Pose,
+    /// Motion.
+    pub motion: Motion,
+    /// Coulomb friction with other bodies and walls.
+    pub friction: f64,
+}
+
+/// A velocity motor on a joint's free axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VelocityMotor {
+    /// Target velocity (rad/s or m/s).
+    pub target: f64,
+    /// Largest torque (N m) or force (N) the motor may apply.
+    pub max_effort: f64,
+}
+
+/// Joint kinds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointKind {
+    /// Rotation about one axis.
+    Revolute,
+    /// Translation along one axis.
+    Prismatic,
+}
+
+/// A joint between two bodies, given in the world frame at creation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointDesc {
+    /// Name.
+    pub name: String,
+    /// First body.
+    pub body1: BodyId,
+    /// Second body.
+    pub body2: BodyId,
+    /// Kind.
+    pub kind: JointKind,
+    /// Anchor point (world, m).
+    pub anchor: [f64; 3],
+    /// Free axis (world).
+    pub axis: [f64; 3],
+    /// Optional velocity motor.
+    pub motor: Option<VelocityMotor>,
+}
+
+/// Index of a body in a [`RigidWorld`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct BodyId(pub usize);
+
+/// Index of a joint in a [`RigidWorld`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct JointId(pub usize);
+
+/// A body's state in the world frame. Velocities and accelerations are those of the centre of
+/// mass; accelerations are finite differences over the last step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BodyState {
+    /// Body-frame origin (m).
+    pub origin: [f64; 3],
+    /// Centre of mass (m).
+    pub com: [f64; 3],
+    /// Orientation, unit quaternion `[x, y, z, w]`.
+    pub rotation: [f64; 4],
+    /// Linear velocity of the centre of mass (m/s).
+    pub linvel: [f64; 3],
+    /// Angular velocity (rad/s).
+    pub angvel: [f64; 3],
+    /// Linear acceleration (m/s²).
+    pub linacc: [f64; 3],
+    /// Angular acceleration (rad/s²).
+    pub angacc: [f64; 3],
+}
+
+impl BodyState {
+    /// Velocity of a world point moving with the body (m/s).
+    pub fn velocity_at(&self, p: [f64; 3]) -> [f64; 3] {
+        let r = sub(p, self.com);
+        add(self.linvel, cross(self.angvel, r))
+    }
+    /// Acceleration of a world point moving with the body (m/s²), rigid-body kinematics.
+    pub fn acceleration_at(&self, p: [f64; 3]) -> [f64; 3] {
+        let r = sub(p, self.com);
+        add(add(self.linacc, cross(self.angacc, r)), cross(self.angvel, cross(self.angvel, r)))
+    }
+    /// Body-frame point to world.
+    pub fn to_world(&self, local: [f64; 3]) -> [f64; 3] {
+        add(self.origin, quat_rotate(self.rotation, local))
+    }
+}
+
+pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+fn v3(a: [f64; 3]) -> Vector {
+    Vector::new(a[0] as Real, a[1] as Real, a[2] as Real)
+}
+fn a3(v: Vector) -> [f64; 3] {
+    [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
+}
+fn quat(q: [f64; 4]) -> Rotation {
+    Rotation::from_xyzw(q[0] as Real, q[1] as Real, q[2] as Real, q[3] as Real).normalize()
+}
+fn pose(p: &Pose) -> rapier3d::math::Pose {
+    rapier3d::math::Pose::from_parts(v3(p.translation), quat(p.rotation))
+}
+
+struct BodyRecord {
+    name: String,
+    handle: RigidBodyHandle,
+    motion: Motion,
+    force: [f64; 3],
+    torque: [f64; 3],
+    linacc: [f64; 3],
+    angacc: [f64; 3],
+    mass: f64,
+}
+
+struct JointRecord {
+    name: String,
+    handle: ImpulseJointHandle,
+    kind: JointKind,
+}
+
+/// A rapier world with Z up, SI units and an `f64` interface.
+///
+/// Forces applied with [`RigidWorld::set_wrench`] act at the centre of mass and are re-applied
+/// every step (rapier keeps user forces until `reset_forces`, so each step resets them first
+/// and adds the current wrench: a wrench is never applied twice, and never forgotten).
+pub struct RigidWorld {
+    world: PhysicsWorld,
+    bodies: Vec<BodyRecord>,
+    joints: Vec<JointRecord>,
+    time: f64,
+}
+
+impl RigidWorld {
+    /// An empty world with the given gravity (m/s², world frame).
+    pub fn new(gravity: [f64; 3]) -> Self {
+        let mut world = PhysicsWorld::default();
+        world.gravity = v3(gravity);
+        Self { world, bodies: Vec::new(), joints: Vec::new(), time: 0.0 }
+    }
+
+    /// Simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Number of bodies.
+    pub fn len(&self) -> usize {
+        self.bodies.len()
+    }
+
+    /// True when there are no bodies.
+    pub fn is_empty(&self) -> bool {
+        self.bodies.is_empty()
+    }
+
+    /// Body name.
+    pub fn name(&self, b: BodyId) -> &str {
+        &self.bodies[b.0].name
+    }
+
+    /// Finds a body by name.
+    pub fn find(&self, name: &str) -> Option<BodyId> {
+        self.bodies.iter().position(|b| b.name == name).map(BodyId)
+    }
+
+    /// The underlying rapier world (for advanced use; changes made there bypass this API).
+    pub fn rapier(&self) -> &PhysicsWorld {
+        &self.world
+    }
+
+    /// Adds a body.
+    pub fn add_body(&mut self, desc: &BodyDesc) -> Result<BodyId, RigidError> {
+        if self.find(&desc.name).is_some() {
+            return Err(RigidError::Invalid(format!("body name \"{}\" is used twice", desc.name)));
+        }
+        let builder = match &desc.motion {
+            Motion::Free => RigidBodyBuilder::dynamic(),
+            Motion::Fixed => RigidBodyBuilder::fixed(),
+            Motion::Prescribed { linvel, angvel } => {
+                RigidBodyBuilder::kinematic_velocity_based().linvel(v3(*linvel)).angvel(v3(*angvel))
+            }
+            Motion::Waypoints(w) => {
+                if w.is_empty() || w.windows(2).any(|p| p[1].0 <= p[0].0) {
+                    return Err(RigidError::Invalid(format!(
+                        "body \"{}\": waypoints need increasing times",
+                        desc.name
+                    )));
+                }
+                RigidBodyBuilder::kinematic_position_based()
+            }
+        };
+        let body = builder.pose(pose(&desc.pose)).can_sleep(false).ccd_enabled(false).build();
+        let handle = self.world.bodies.insert(body);
+        let total_volume = desc.shape.volume();
+        if !(total_volume > 0.0 && total_volume.is_finite()) {
+            return Err(RigidError::Invalid(format!("body \"{}\": shape has no volume", desc.name)));
+        }
+        let density = match desc.mass {
+            MassSpec::Density(d) => d,
+            MassSpec::Mass(m) => m / total_volume,
+        };
+        if !(density > 0.0 && density.is_finite()) {
+            return Err(RigidError::Invalid(format!("body \"{}\": mass and density must be positive", desc.name)));
+        }
+        for (p, collider) in colliders(&desc.shape, &Pose::default())? {
+            let c = collider.position(pose(&p)).density(density as Real).friction(desc.friction as Real).build();
+            self.world.colliders.insert_with_parent(c, handle, &mut self.world.bodies);
+        }
+        let mass = f64::from(self.world.bodies[handle].mass());
+        self.bodies.push(BodyRecord {
+            name: desc.name.clone(),
+            handle,
+            motion: desc.motion.clone(),
+            force: [0.0; 3],
+            torque: [0.0; 3],
+            linacc: [0.0; 3],
+            angacc: [0.0; 3],
+            mass,
+        });
+        Ok(BodyId(self.bodies.len() - 1))
+    }
+
+    /// Adds a fixed, axis-aligned box (walls, floors) that bodies collide with.
+    pub fn add_fixed_box(
+        &mut self,
+        name: &str,
+        min: [f64; 3],
+        max: [f64; 3],
+        friction: f64,
+    ) -> Result<BodyId, RigidError> {
+        let size = [max[0] - min[0], max[1] - min[1], max[2] - min[2]];
+        let center = [0.5 * (min[0] + max[0]), 0.5 * (min[1] + max[1]), 0.5 * (min[2] + max[2])];
+        self.add_body(&BodyDesc {
+            name: name.to_string(),
+            shape: ShapeDesc::Box { size },
+            mass: MassSpec::Density(1000.0),
+            pose: Pose::translation(center),
+            motion: Motion::Fixed,
+            friction,
+        })
+    }
+
+    /// Adds a joint.
+    pub fn add_joint(&mut self, j: &JointDesc) -> Result<JointId, RigidError> {
+        let (h1, h2) = (self.bodies[j.body1.0].handle, self.bodies[j.body2.0].handle);
+        let n = (j.axis[0] * j.axis[0] + j.axis[1] * j.axis[1] + j.axis[2] * j.axis[2]).sqrt();
+        if !(n > 0.0) {
+            return Err(RigidError::Invalid(format!("joint \"{}\": zero axis", j.name)));
+        }
+        let axis = [j.axis[0] / n, j.axis[1] / n, j.axis[2] / n];
+        let p1 = *self.world.bodies[h1].position();
+        let p2 = *self.world.bodies[h2].position();
+        let anchor = v3(j.anchor);
+        let a = v3(axis);
+        let (mask, motor_axis) = match j.kind {
+            JointKind::Revolute => (JointAxesMask::LOCKED_REVOLUTE_AXES, JointAxis::AngX),
+            JointKind::Prismatic => (JointAxesMask::LOCKED_PRISMATIC_AXES, JointAxis::LinX),
+        };
+        let mut b = GenericJointBuilder::new(mask)
+            .local_anchor1(p1.inverse_transform_point(anchor))
+            .local_anchor2(p2.inverse_transform_point(anchor))
+            .local_axis1(p1.inverse_transform_vector(a))
+            .local_axis2(p2.inverse_transform_vector(a))
+            .contacts_enabled(false);
+        if let Some(m) = j.motor {
+            b = b
+                .motor_velocity(motor_axis, m.target as Real, MOTOR_GAIN)
+                .motor_max_force(motor_axis, m.max_effort as Real);
+        }
+        let handle = self.world.impulse_joints.insert(h1, h2, b.build(), true);
+        self.joints.push(JointRecord { name: j.name.clone(), handle, kind: j.kind });
+        Ok(JointId(self.joints.len() - 1))
+    }
+
+    /// Joint name.
+    pub fn joint_name(&self, j: JointId) -> &str {
+        &self.joints[j.0].name
+    }
+
+    /// Changes a joint motor's target velocity (rad/s or m/s).
+    pub fn set_motor_target(&mut self, j: JointId, target: f64) {
+        let rec = &self.joints[j.0];
+        let axis = match rec.kind {
+            JointKind::Revolute => JointAxis::AngX,
+            JointKind::Prismatic => JointAxis::LinX,
+        };
+        if let Some(joint) = self.world.impulse_joints.get_mut(rec.handle, true) {
+            joint.data.set_motor_velocity(axis, target as Real, MOTOR_GAIN);
+        }
+    }
+
+    /// Sets the wrench applied at a body's centre of mass from now on (world frame, N and N m).
+    pub fn set_wrench(&mut self, b: BodyId, force: [f64; 3], torque: [f64; 3]) {
+        let rec = &mut self.bodies[b.0];
+        rec.force = force;
+        rec.torque = torque;
+    }
+
+    /// Changes a prescribed body's velocity (ignored for other motions).
+    pub fn set_prescribed_velocity(&mut self, b: BodyId, linvel: [f64; 3], angvel: [f64; 3]) {
+        let rec = &mut self.bodies[b.0];
+        if let Motion::Prescribed { .. } = rec.motion {
+            rec.motion = Motion::Prescribed { linvel, angvel };
+        }
+    }
+
+    /// The body's motion.
+    pub fn motion(&self, b: BodyId) -> &Motion {
+        &self.bodies[b.0].motion
+    }
+
+    /// Mass (kg).
+    pub fn mass(&self, b: BodyId) -> f64 {
+        self.bodies[b.0].mass
+    }
+
+    /// Principal angular inertia about the centre of mass (kg m², principal axes).
+    pub fn principal_inertia(&self, b: BodyId) -> [f64; 3] {
+        let props = self.world.bodies[self.bodies[b.0].handle].mass_properties().local_mprops;
+        a3(props.principal_inertia())
+    }
+
+    /// State of a body.
+    pub fn state(&self, b: BodyId) -> BodyState {
+        let rec = &self.bodies[b.0];
+        let body = &self.world.bodies[rec.handle];
+        let p = body.position();
+        let r = p.rotation;
+        BodyState {
+            origin: a3(p.translation),
+            com: a3(body.center_of_mass()),
+            rotation: [f64::from(r.x), f64::from(r.y), f64::from(r.z), f64::from(r.w)],
+            linvel: a3(body.linvel()),
+            angvel: a3(body.angvel()),
+            linacc: rec.linacc,
+            angacc: rec.angacc,
+        }
+    }
+
+    /// Advances by one rapier step of `dt` (s): prescribed motions and wrenches are applied,
+    /// then the solver runs, then accelerations are updated.
+    pub fn step(&mut self, dt: f64) {
+        self.world.integration_parameters.dt = dt as Real;
+        let t1 = self.time + dt;
+        let mut before = Vec::with_capacity(self.bodies.len());
+        for rec in &self.bodies {
+            let body = &mut self.world.bodies[rec.handle];
+            before.push((a3(body.linvel()), a3(body.angvel())));
+            match &rec.motion {
+                Motion::Free => {
+                    body.reset_forces(true);
+                    body.reset_torques(true);
+                    body.add_force(v3(rec.force), true);
+                    body.add_torque(v3(rec.torque), true);
+                }
+                Motion::Fixed => {}
+                Motion::Prescribed { linvel, angvel } => {
+                    body.set_linvel(v3(*linvel), true);
+                    body.set_angvel(v3(*angvel), true);
+                }
+                Motion::Waypoints(w) => {
+                    let target = waypoint(w, t1);
+                    let mut next = *body.position();
+                    next.translation = v3(target);
+                    body.set_next_kinematic_position(next);
+                }
+            }
+        }
+        self.world.step();
+        for (rec, (v0, w0)) in self.bodies.iter_mut().zip(before) {
+            let body = &self.world.bodies[rec.handle];
+            let (v1, w1) = (a3(body.linvel()), a3(body.angvel()));
+            rec.linacc = [0, 1, 2].map(|k| (v1[k] - v0[k]) / dt);
+            rec.angacc = [0, 1, 2].map(|k| (w1[k] - w0[k]) / dt);
+        }
+        self.time = t1;
+    }
+}
+
+/// Damping gain of velocity motors (1/s, acceleration-based): stiff enough that a motor holds
+/// its target unless the effort limit is reached.
+const MOTOR_GAIN: Real = 1.0e4;
+
+fn waypoint(w: &[(f64, [f64; 3])], t: f64) -> [f64; 3] {
+    if t <= w[0].0 {
+        return w[0].1;
+    }
+    for p in w.windows(2) {
+        if t <= p[1].0 {
+            let s = (t - p[0].0) / (p[1].0 - p[0].0);
+            return [0, 1, 2].map(|k| p[0].1[k] + s * (p[1].1[k] - p[0].1[k]));
+        }
+    }
+    w[w.len() - 1].1
+}
+
+/// Rapier colliders (with their poses in the body frame) of a shape.
+fn colliders(shape: &ShapeDesc, at: &Pose) -> Result<Vec<(Pose, ColliderBuilder)>, RigidError> {
+    let along_y_to = |axis: Axis| -> Pose {
+        // Rapier's cylinders and cones run along +y; rotate them onto the wanted axis.
+        match axis {
+            Axis::Y => Pose::default(),
+            Axis::X => Pose::from_rpy_deg([0.0; 3], [0.0, 0.0, -90.0]),
+            Axis::Z => Pose::from_rpy_deg([0.0; 3], [90.0, 0.0, 0.0]),
+        }
+    };
+    let positive = |x: f64, what: &str| {
+        if x > 0.0 && x.is_finite() {
+            Ok(())
+        } else {
+            Err(RigidError::Invalid(format!("{what} must be > 0 (got {x})")))
+        }
+    };
+    Ok(match shape {
+        ShapeDesc::Box { size } => {
+            for s in size {
+                positive(*s, "box size")?;
+            }
+            vec![(
+                *at,
+                ColliderBuilder::cuboid((0.5 * size[0]) as Real, (0.5 * size[1]) as Real, (0.5 * size[2]) as Real),
+            )]
+        }
+        ShapeDesc::Sphere { radius } => {
+            positive(*radius, "sphere radius")?;
+            vec![(*at, ColliderBuilder::ball(*radius as Real))]
+        }
+        ShapeDesc::Cylinder { radius, length, axis } => {
+            positive(*radius, "cylinder radius")?;
+            positive(*length, "cylinder length")?;
+            vec![(at.compose(&along_y_to(*axis)), ColliderBuilder::cylinder((0.5 * length) as Real, *radius as Real))]
+        }
+        ShapeDesc::Cone { radius, height } => {
+            positive(*radius, "cone radius")?;
+            positive(*height, "cone height")?;
+            // Apex down: +y onto −z.
+            let down = Pose::from_rpy_deg([0.0; 3], [-90.0, 0.0, 0.0]);
+            vec![(at.compose(&down), ColliderBuilder::cone((0.5 * height) as Real, *radius as Real))]
+        }
+        ShapeDesc::Mesh { vertices, indices } => {
+            let pts: Vec<Vector> = vertices.iter().map(|v| v3(*v)).collect();
+            let c = ColliderBuilder::convex_hull(&pts)
+                .ok_or_else(|| RigidError::Invalid("mesh has no convex hull (degenerate vertices)".into()))?;
+            let _ = indices;
+            vec![(*at, c)]
+        }
+        ShapeDesc::Wheel { radius, width, grousers } => {
+            positive(*radius, "wheel radius")?;
+            positive(*width, "wheel width")?;
+            let mut v = vec![(
+                at.compose(&along_y_to(Axis::Y)),
+                ColliderBuilder::cylinder((0.5 * width) as Real, *radius as Real),
+            )];
+            if let Some(g) = grousers {
+                positive(g.height, "grouser height")?;
+                positive(g.thickness, "grouser thickness")?;
+                for k in 0..g.count {
+                    let angle = 360.0 * k as f64 / g.count as f64;
+                    // A plate centred at radius R + h/2, extending radially, across the width.
+                    let rot = Pose::from_rpy_deg([0.0; 3], [0.0, angle, 0.0]);
+                    let centre = rot.rotate([0.0, 0.0, radius + 0.5 * g.height]);
+                    let p = at.compose(&Pose { translation: centre, rotation: rot.rotation });
+                    v.push((
+                        p,
+                        ColliderBuilder::cuboid(
+                            (0.5 * g.thickness) as Real,
+                            (0.5 * width) as Real,
+                            (0.5 * g.height) as Real,
+                        ),
+                    ));
+                }
+            }
+            v
+        }
+        ShapeDesc::Compound(parts) => {
+            let mut v = Vec::new();
+            for (p, s) in parts {
+                v.extend(colliders(s, &at.compose(p))?);
+            }
+            v
+        }
+    })
+}

@@ -1,0 +1,162 @@
+//! The rigid world behaves as rapier does, and its additions (wrenches, motors, prescribed
+//! motion) do what they say.
+
+use rapier3d::prelude::*;
+use regolith_rigid::{
+    Axis, BodyDesc, JointDesc, JointKind, MassSpec, Motion, Pose, RigidWorld, ShapeDesc, VelocityMotor,
+};
+
+fn body(name: &str, shape: ShapeDesc, mass: f64, at: [f64; 3], motion: Motion) -> BodyDesc {
+    BodyDesc {
+        name: name.into(),
+        shape,
+        mass: MassSpec::Mass(mass),
+        pose: Pose::translation(at),
+        motion,
+        friction: 0.5,
+    }
+}
+
+#[test]
+fn a_free_body_falls_exactly_as_in_plain_rapier() {
+    let mut w = RigidWorld::new([0.0, 0.0, -9.81]);
+    let b = w
+        .add_body(&body("box", ShapeDesc::Box { size: [0.2, 0.3, 0.1] }, 3.0, [0.0, 0.0, 1.0], Motion::Free))
+        .expect("body");
+    w.add_fixed_box("floor", [-1.0, -1.0, -0.1], [1.0, 1.0, 0.0], 0.5).expect("floor");
+
+    let mut r = PhysicsWorld::default();
+    r.gravity = Vector::new(0.0, 0.0, -9.81);
+    let h =
+        r.bodies.insert(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.0, 1.0)).can_sleep(false).build());
+    let vol = 0.2 * 0.3 * 0.1;
+    r.colliders.insert_with_parent(
+        ColliderBuilder::cuboid(0.1, 0.15, 0.05).density((3.0 / vol) as f32).friction(0.5).build(),
+        h,
+        &mut r.bodies,
+    );
+    let g = r.bodies.insert(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.0, -0.05)).build());
+    r.colliders.insert_with_parent(
+        ColliderBuilder::cuboid(1.0, 1.0, 0.05).density(1000.0).friction(0.5).build(),
+        g,
+        &mut r.bodies,
+    );
+
+    for _ in 0..400 {
+        w.step(1.0 / 240.0);
+        r.integration_parameters.dt = 1.0 / 240.0;
+        r.step();
+        let a = w.state(b);
+        let p = r.bodies[h].translation();
+        assert_eq!(a.origin, [f64::from(p.x), f64::from(p.y), f64::from(p.z)], "trajectories diverge");
+    }
+    // It landed on the floor: half its height above z = 0.
+    assert!((w.state(b).origin[2] - 0.05).abs() < 2e-3);
+    assert!((w.mass(b) - 3.0).abs() < 1e-5);
+}
+
+#[test]
+fn a_wrench_at_the_centre_of_mass_accelerates_without_spin() {
+    let mut w = RigidWorld::new([0.0; 3]);
+    let b = w.add_body(&body("ball", ShapeDesc::Sphere { radius: 0.1 }, 2.0, [0.0; 3], Motion::Free)).expect("body");
+    w.set_wrench(b, [4.0, 0.0, 0.0], [0.0; 3]);
+    for _ in 0..100 {
+        w.step(0.01);
+    }
+    let s = w.state(b);
+    // v = F/m t = 2 m/s after 1 s; the force is applied every step, not accumulated.
+    assert!((s.linvel[0] - 2.0).abs() < 1e-4, "v = {:?}", s.linvel);
+    assert!((s.linacc[0] - 2.0).abs() < 1e-3);
+    assert!(s.angvel.iter().all(|w| w.abs() < 1e-9));
+    // A pure torque spins it: I = 2/5 m r² = 0.008 kg m², τ = 0.008 → α = 1 rad/s².
+    w.set_wrench(b, [0.0; 3], [0.0, 0.0, 0.008]);
+    for _ in 0..100 {
+        w.step(0.01);
+    }
+    let s = w.state(b);
+    assert!((s.angvel[2] - 1.0).abs() < 1e-3, "ω = {:?}", s.angvel);
+}
+
+#[test]
+fn a_revolute_motor_drives_a_wheel_at_its_target_speed() {
+    let mut w = RigidWorld::new([0.0, 0.0, -9.81]);
+    let frame = w
+        .add_body(&body("frame", ShapeDesc::Box { size: [0.1, 0.1, 0.1] }, 1.0, [0.0, 0.0, 1.0], Motion::Fixed))
+        .expect("frame");
+    let wheel = w
+        .add_body(&body(
+            "wheel",
+            ShapeDesc::Wheel { radius: 0.2, width: 0.1, grousers: None },
+            5.0,
+            [0.0, 0.0, 1.0],
+            Motion::Free,
+        ))
+        .expect("wheel");
+    let j = w
+        .add_joint(&JointDesc {
+            name: "axle".into(),
+            body1: frame,
+            body2: wheel,
+            kind: JointKind::Revolute,
+            anchor: [0.0, 0.0, 1.0],
+            axis: [0.0, 1.0, 0.0],
+            motor: Some(VelocityMotor { target: 2.0, max_effort: 100.0 }),
+        })
+        .expect("joint");
+    for _ in 0..200 {
+        w.step(1.0 / 200.0);
+    }
+    let s = w.state(wheel);
+    assert!((s.angvel[1] - 2.0).abs() < 0.02, "ω = {:?}", s.angvel);
+    assert!((s.origin[2] - 1.0).abs() < 1e-3, "the axle holds the wheel up");
+    w.set_motor_target(j, -1.0);
+    for _ in 0..200 {
+        w.step(1.0 / 200.0);
+    }
+    assert!((w.state(wheel).angvel[1] + 1.0).abs() < 0.02);
+}
+
+#[test]
+fn prescribed_and_waypoint_motion_follow_their_paths() {
+    let mut w = RigidWorld::new([0.0, 0.0, -9.81]);
+    let a = w
+        .add_body(&body(
+            "plate",
+            ShapeDesc::Cylinder { radius: 0.1, length: 0.02, axis: Axis::Z },
+            1.0,
+            [0.0, 0.0, 0.5],
+            Motion::Prescribed { linvel: [0.0, 0.0, -0.1], angvel: [0.0; 3] },
+        ))
+        .expect("plate");
+    let c = w
+        .add_body(&body(
+            "cone",
+            ShapeDesc::Cone { radius: 0.02, height: 0.05 },
+            1.0,
+            [0.0, 0.0, 0.5],
+            Motion::Waypoints(vec![(0.0, [0.0, 0.0, 0.5]), (1.0, [0.0, 0.0, 0.3]), (2.0, [0.0, 0.0, 0.5])]),
+        ))
+        .expect("cone");
+    for _ in 0..100 {
+        w.step(0.01);
+    }
+    assert!((w.state(a).origin[2] - 0.4).abs() < 1e-5);
+    assert!((w.state(c).origin[2] - 0.3).abs() < 1e-5);
+    w.set_prescribed_velocity(a, [0.0; 3], [0.0; 3]);
+    for _ in 0..50 {
+        w.step(0.01);
+    }
+    assert!((w.state(a).origin[2] - 0.4).abs() < 1e-5);
+    assert!((w.state(c).origin[2] - 0.4).abs() < 1e-5);
+}
+
+#[test]
+fn invalid_descriptions_are_errors() {
+    let mut w = RigidWorld::new([0.0; 3]);
+    assert!(w.add_body(&body("a", ShapeDesc::Sphere { radius: -1.0 }, 1.0, [0.0; 3], Motion::Free)).is_err());
+    w.add_body(&body("a", ShapeDesc::Sphere { radius: 1.0 }, 1.0, [0.0; 3], Motion::Free)).expect("ok");
+    assert!(
+        w.add_body(&body("a", ShapeDesc::Sphere { radius: 1.0 }, 1.0, [0.0; 3], Motion::Free)).is_err(),
+        "duplicate name"
+    );
+}
