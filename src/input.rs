@@ -157,9 +157,35 @@ fn header(l: &str) -> Option<Header> {
 }
 
 /// The 1-based line where a dotted key (`sph.spacing`, `materials[1].density`, `bodies[0]`) is
-/// written: the key's own line, else the header of its table (best effort; inline tables are
-/// not followed).
+/// written: the key's own line, else the line of the nearest enclosing key (a key inside an
+/// inline table, `bodies[0].shape.radius`, resolves to the line of `bodies[0].shape`), else the
+/// header of its table.
 pub fn locate_key(source: &str, key: &str) -> Option<usize> {
+    if let Some(line) = locate_exact(source, key) {
+        return Some(line);
+    }
+    let mut k = key;
+    while let Some((parent, _)) = k.rsplit_once('.') {
+        if let Some(line) = locate_exact(source, parent).filter(|_| key_is_written(source, parent)) {
+            return Some(line);
+        }
+        k = parent;
+    }
+    table_header_line(source, key)
+}
+
+fn key_is_written(source: &str, key: &str) -> bool {
+    lines(source).any(|l| l.key.as_ref().is_some_and(|k| join(&l.table, k) == key) || (l.header && l.table == key))
+}
+
+fn table_header_line(source: &str, key: &str) -> Option<usize> {
+    let table_of_key = key.rsplit_once('.').map(|(t, _)| t).unwrap_or("");
+    lines(source)
+        .find(|l| l.header && (l.table == table_of_key || table_of_key.starts_with(&format!("{}.", l.table))))
+        .map(|l| l.number)
+}
+
+fn locate_exact(source: &str, key: &str) -> Option<usize> {
     let table_of_key = key.rsplit_once('.').map(|(t, _)| t).unwrap_or("");
     let mut header_line = None;
     for l in lines(source) {

@@ -11,8 +11,11 @@ pub mod element;
 pub mod input;
 pub mod material;
 pub mod plot;
+pub mod rig;
 pub mod run;
 pub mod scene;
+pub mod series;
+pub mod sim;
 
 pub mod element_plot;
 

@@ -1,5 +1,5 @@
-//! Running terrain scenes: build the solver from a [`Scene`], step it to the end time, and
-//! write `summary.json` and `particles_final.csv`.
+//! Running scenes: build the simulation from a [`Scene`], step it to the end time (or run its
+//! rig), and write `summary.json`, `particles_final.csv`, `series.csv` and plots.
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -12,6 +12,8 @@ use regolith_terrain::{RegionSpec, SoilRegion, TerrainBuild, build_terrain};
 use serde::Serialize;
 
 use crate::scene::{Precision, Scene};
+use crate::series::Series;
+use crate::sim::{Body, Simulation};
 
 /// Version of the `summary.json` layout.
 pub const SUMMARY_SCHEMA_VERSION: u32 = 1;
@@ -71,6 +73,95 @@ pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, RunError> {
     .map_err(|e| RunError::Build(e.to_string()))?;
     let solver = CpuSph::new(scene.solver, mats, &terrain.particles, &terrain.markers, terrain.domain)?;
     Ok(SoilModel { solver, terrain })
+}
+
+/// Counts what the stepping loop did, for the summary and the progress line.
+#[derive(Debug)]
+pub struct Stepper {
+    start: Instant,
+    last_print: Instant,
+    /// Soil steps taken.
+    pub steps: u64,
+    /// Soil particles × steps.
+    pub particle_steps: f64,
+    /// Sum of neighbour pairs over steps (for the mean).
+    pub pairs: f64,
+    /// Largest particle speed seen (m/s).
+    pub max_speed_run: f64,
+    /// Largest particle speed at the last step (m/s).
+    pub last_speed: f64,
+    /// Smallest soil step (s).
+    pub dt_min: f64,
+    /// Largest soil step (s).
+    pub dt_max: f64,
+    quiet: bool,
+    end_time: f64,
+}
+
+impl Stepper {
+    /// A fresh counter for a run that ends at `end_time` (s).
+    pub fn new(quiet: bool, end_time: f64) -> Self {
+        Self {
+            start: Instant::now(),
+            last_print: Instant::now(),
+            steps: 0,
+            particle_steps: 0.0,
+            pairs: 0.0,
+            max_speed_run: 0.0,
+            last_speed: 0.0,
+            dt_min: f64::INFINITY,
+            dt_max: 0.0,
+            quiet,
+            end_time,
+        }
+    }
+
+    /// Advances a simulation by one exchange interval (at most to the end time).
+    pub fn step<T: Real>(&mut self, sim: &mut Simulation<T>) -> Result<(), RunError> {
+        let remaining = self.end_time - sim.time();
+        let r = sim.step_max(Some(remaining))?;
+        let n = sim.system.fluid.active() as f64;
+        self.steps += u64::from(r.fluid_steps);
+        self.particle_steps += n * f64::from(r.fluid_steps);
+        self.pairs += r.pairs as f64 * f64::from(r.fluid_steps);
+        self.last_speed = r.max_speed;
+        self.dt_min = self.dt_min.min(r.dt_min);
+        self.dt_max = self.dt_max.max(r.dt_max);
+        self.max_speed_run = self.max_speed_run.max(r.max_speed);
+        if !self.quiet && self.last_print.elapsed().as_secs_f64() > 2.0 {
+            self.last_print = Instant::now();
+            let el = self.start.elapsed().as_secs_f64();
+            let t = sim.time();
+            eprintln!(
+                "  t = {t:.4} / {} s, {} steps, {:.2e} particle-steps/s, real-time factor {:.2e}",
+                self.end_time,
+                self.steps,
+                self.particle_steps / el,
+                t / el
+            );
+        }
+        Ok(())
+    }
+
+    /// Wall-clock time since the counter started (s).
+    pub fn elapsed(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+}
+
+/// A body's final state in the summary.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct BodySummary {
+    /// Name.
+    pub name: String,
+    /// Centre of mass at the end (m).
+    pub position: [f64; 3],
+    /// Centre-of-mass velocity at the end (m/s).
+    pub velocity: [f64; 3],
+    /// Mean soil force over the last exchange interval (N).
+    pub fsi_force: [f64; 3],
+    /// Mean soil torque about the centre of mass over the last exchange interval (N m).
+    pub fsi_torque: [f64; 3],
 }
 
 /// Runout of an axisymmetric column collapse.
@@ -142,6 +233,14 @@ pub struct Summary {
     pub error: Option<String>,
     /// Column-collapse runout, for scenes whose soil is one cylinder.
     pub runout: Option<Runout>,
+    /// Bodies at the end.
+    pub bodies: Vec<BodySummary>,
+    /// The rig's report, if the scene has a rig.
+    pub rig: Option<serde_json::Value>,
+    /// Bekker pressure–sinkage fit of a plate rig.
+    pub bekker: Option<crate::rig::bekker::BekkerFit>,
+    /// Files written.
+    pub outputs: Vec<String>,
     /// Adjustments made while building (e.g. container snapping).
     pub notes: Vec<String>,
 }
@@ -165,68 +264,65 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError> 
 }
 
 fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError> {
-    let mut model = build_soil::<T>(scene)?;
     std::fs::create_dir_all(&opts.out)
         .map_err(|e| RunError::Output { path: opts.out.clone(), message: e.to_string() })?;
-    let initial: Vec<[f64; 3]> = model.solver.positions().iter().map(|p| p.as_f64()).collect();
-    let mass_initial = model.solver.total_mass();
-    let n = model.solver.len();
-    let start = Instant::now();
-    let mut last_print = Instant::now();
-    let (mut dt_min, mut dt_max, mut pairs, mut vmax_run) = (f64::INFINITY, 0.0_f64, 0.0, 0.0_f64);
+    let mut stepper = Stepper::new(opts.quiet, scene.end_time);
+    let mut outputs = Vec::new();
     let mut failure = None;
-    let mut last_speed = 0.0;
-    while model.solver.time() < scene.end_time * (1.0 - 1e-12) {
-        let remaining = scene.end_time - model.solver.time();
-        match model.solver.step(Some(remaining)) {
-            Ok(r) => {
-                dt_min = dt_min.min(r.dt);
-                dt_max = dt_max.max(r.dt);
-                pairs += r.pairs as f64;
-                last_speed = r.max_speed;
-                vmax_run = vmax_run.max(r.max_speed);
-            }
-            Err(e) => {
+    let (sim, series, rig, bekker, figures, initial) = if let Some(spec) = &scene.rig {
+        match crate::rig::run_rig::<T>(scene, spec, &mut stepper) {
+            Ok(out) => (out.last, Some(out.series), Some(out.report), out.bekker, out.figures, None),
+            Err(RunError::Solver(e)) => {
                 failure = Some(e);
-                break;
+                (None, None, None, None, Vec::new(), None)
+            }
+            Err(e) => return Err(e),
+        }
+    } else {
+        let mut sim = Simulation::<T>::new(scene)?;
+        let initial: Vec<[f64; 3]> = sim.system.fluid.positions().iter().map(|p| p.as_f64()).collect();
+        let mut series = (!scene.bodies.is_empty()).then(|| Series::new(&sim, false, &[]));
+        if let Some(s) = series.as_mut() {
+            s.push(&sim, None, &[]);
+        }
+        while sim.time() < scene.end_time * (1.0 - 1e-12) {
+            match stepper.step(&mut sim) {
+                Ok(()) => {
+                    if let Some(s) = series.as_mut() {
+                        s.push(&sim, None, &[]);
+                    }
+                }
+                Err(RunError::Solver(e)) => {
+                    failure = Some(e);
+                    break;
+                }
+                Err(e) => return Err(e),
             }
         }
-        if !opts.quiet && last_print.elapsed().as_secs_f64() > 2.0 {
-            last_print = Instant::now();
-            let el = start.elapsed().as_secs_f64();
-            let t = model.solver.time();
-            eprintln!(
-                "  t = {t:.4} / {} s, {} steps, {:.2e} particle-steps/s, eta {:.0} s",
-                scene.end_time,
-                model.solver.steps(),
-                n as f64 * model.solver.steps() as f64 / el,
-                el * (scene.end_time - t) / t.max(1e-30)
-            );
-        }
-    }
-    let wall = start.elapsed().as_secs_f64();
-    let steps = model.solver.steps();
-    let runout = column_runout(scene, &initial, &model.solver);
-    let summary = Summary {
+        (Some(sim), series, None, None, Vec::new(), Some(initial))
+    };
+    let wall = stepper.elapsed();
+    let fluid = sim.as_ref().map(|s| &s.system.fluid);
+    let mut summary = Summary {
         schema_version: SUMMARY_SCHEMA_VERSION,
         scene: scene.path.display().to_string(),
         backend: "cpu".into(),
         adapter: "cpu".into(),
         precision: T::NAME.into(),
-        particles: n,
-        markers: model.solver.marker_positions().len(),
-        steps,
-        sim_time: model.solver.time(),
+        particles: fluid.map_or(0, |f| f.len()),
+        markers: fluid.map_or(0, |f| f.marker_positions().len()),
+        steps: stepper.steps,
+        sim_time: sim.as_ref().map_or(0.0, |s| s.time()),
         wall_time_s: wall,
-        particle_steps_per_s: if wall > 0.0 { n as f64 * steps as f64 / wall } else { 0.0 },
-        neighbour_pairs: if steps > 0 { pairs / steps as f64 } else { 0.0 },
-        dt_min: if dt_min.is_finite() { dt_min } else { 0.0 },
-        dt_max,
-        max_speed: last_speed,
-        max_speed_run: vmax_run,
-        mass_initial,
-        mass_final: model.solver.active_mass(),
-        escaped_particles: model.solver.len() - model.solver.active(),
+        particle_steps_per_s: if wall > 0.0 { stepper.particle_steps / wall } else { 0.0 },
+        neighbour_pairs: if stepper.steps > 0 { stepper.pairs / stepper.steps as f64 } else { 0.0 },
+        dt_min: if stepper.dt_min.is_finite() { stepper.dt_min } else { 0.0 },
+        dt_max: stepper.dt_max,
+        max_speed: stepper.last_speed,
+        max_speed_run: stepper.max_speed_run,
+        mass_initial: fluid.map_or(0.0, |f| f.total_mass()),
+        mass_final: fluid.map_or(0.0, |f| f.active_mass()),
+        escaped_particles: fluid.map_or(0, |f| f.len() - f.active()),
         nan_detected: matches!(
             failure,
             Some(regolith_fsi::SolverError::NonFinite { .. })
@@ -236,11 +332,52 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
                 })
         ),
         error: failure.as_ref().map(|e| e.to_string()),
-        runout,
-        notes: model.terrain.notes.clone(),
+        runout: match (fluid, &initial) {
+            (Some(f), Some(i)) => column_runout(scene, i, f),
+            _ => None,
+        },
+        bodies: sim
+            .as_ref()
+            .map(|s| {
+                (0..s.scene.bodies.len())
+                    .map(|i| {
+                        let st = s.body_state(Body(i));
+                        let w = s.fsi_wrench(Body(i));
+                        BodySummary {
+                            name: s.scene.bodies[i].desc.name.clone(),
+                            position: st.com,
+                            velocity: st.linvel,
+                            fsi_force: w.force,
+                            fsi_torque: w.torque,
+                        }
+                    })
+                    .collect()
+            })
+            .unwrap_or_default(),
+        rig,
+        bekker,
+        outputs: Vec::new(),
+        notes: sim.as_ref().map(|s| s.terrain.notes.clone()).unwrap_or_default(),
     };
-    write_json(&opts.out.join("summary.json"), &summary)?;
-    write_particles_csv(&opts.out.join("particles_final.csv"), &model.solver)?;
+    if let Some(f) = fluid {
+        let p = opts.out.join("particles_final.csv");
+        write_particles_csv(&p, f)?;
+        outputs.push(p);
+    }
+    if let Some(s) = &series {
+        let p = opts.out.join("series.csv");
+        s.write(&p)?;
+        outputs.push(p);
+    }
+    for (stem, fig) in &figures {
+        let files = crate::plot::write_figure(fig, &opts.out, stem)
+            .map_err(|e| RunError::Output { path: e.path.clone(), message: e.message })?;
+        outputs.extend(files);
+    }
+    let summary_path = opts.out.join("summary.json");
+    outputs.push(summary_path.clone());
+    summary.outputs = outputs.iter().map(|p| p.display().to_string()).collect();
+    write_json(&summary_path, &summary)?;
     match failure {
         Some(e) => Err(RunError::Solver(e)),
         None => Ok(summary),

@@ -110,7 +110,7 @@ case!(
     unknown_section,
     "[sph]",
     "[fluid]\nx = 1\n[sph]",
-    "{}:5: key `fluid`: unknown field `fluid`, expected one of `simulation`, `sph`, `materials`, `container`, `terrain`, `soil_blocks` (unknown keys are errors so that nothing is silently ignored)"
+    "{}:5: key `fluid`: unknown field `fluid`, expected one of `simulation`, `sph`, `materials`, `container`, `terrain`, `soil_blocks`, `bodies`, `rig` (unknown keys are errors so that nothing is silently ignored)"
 );
 case!(
     spacing_missing,
@@ -295,4 +295,105 @@ fn check_cli_exit_codes() {
     assert!(err.contains("key `sph.kernel`: unknown variant `gauss`"), "{err}");
     let missing = run(&["check", "no/such/scene.toml"]);
     assert_eq!(missing.status.code(), Some(2));
+}
+
+const BODY: &str = "\n[[bodies]]\nname = \"wheel\"\nshape = { type = \"wheel\", radius = 0.1, width = 0.05 }\nmass = 2.0\nposition = [0.2, 0.2, 0.4]\n\n[rig]\ntype = \"wheel\"\nbody = \"wheel\"\nload = 30.0\nangular_velocity = 1.0\nslips = [0.0, 0.3]\n";
+
+fn body_err(name: &str, from: &str, to: &str) -> (PathBuf, String) {
+    let text = format!("{BASE}{BODY}");
+    assert!(text.contains(from), "bad test: {from:?}");
+    err(name, &text.replacen(from, to, 1))
+}
+
+#[test]
+fn body_and_rig_scene_is_valid() {
+    let s = load_scene(&write("body_ok", &format!("{BASE}{BODY}")), &[]).expect("valid");
+    assert_eq!(s.bodies.len(), 1);
+    assert!(s.rig.is_some());
+}
+
+#[test]
+fn body_and_rig_errors() {
+    let cases: [(&str, &str, &str, &str); 8] = [
+        (
+            "shape = { type = \"wheel\", radius = 0.1, width = 0.05 }\n",
+            "",
+            "{}:24: key `bodies[0].shape`: is required: { type = \"box\" | \"sphere\" | \"cylinder\" | \"cone\" | \"mesh\" | \"wheel\", ... }",
+            "shape_missing",
+        ),
+        (
+            "mass = 2.0",
+            "mass = 2.0\ndensity = 1000.0",
+            "{}:27: key `bodies[0].mass`: and density are both given: give one",
+            "mass_and_density",
+        ),
+        (
+            "radius = 0.1, width",
+            "radius = -0.1, width",
+            "{}:26: key `bodies[0].shape.radius`: must be > 0 m (got -0.1)",
+            "negative_radius",
+        ),
+        (
+            "body = \"wheel\"",
+            "body = \"rover\"",
+            "{}:32: key `rig.body`: \"rover\" is not a body of the scene",
+            "rig_unknown_body",
+        ),
+        (
+            "slips = [0.0, 0.3]",
+            "slips = [0.0, 1.3]",
+            "{}:35: key `rig.slips`: must be in [0, 1] (got 1.3)",
+            "slip_range",
+        ),
+        (
+            "slips = [0.0, 0.3]",
+            "slips = [0.0, 0.3]\nspeed = 0.1",
+            "{}:36: key `rig.speed`: does not apply to a wheel rig",
+            "rig_foreign_key",
+        ),
+        (
+            "position = [0.2, 0.2, 0.4]",
+            "position = [0.2, 0.2, 0.4]\nmotion = { type = \"fixed\" }",
+            "{}:29: key `bodies[0].motion`: is set, but the wheel rig drives body \"wheel\"; remove it",
+            "rig_body_motion",
+        ),
+        (
+            "{ type = \"wheel\", radius = 0.1, width = 0.05 }",
+            "{ type = \"box\", size = [0.1, 0.1, 0.1] }",
+            "{}:32: key `rig.body`: \"wheel\" must be a wheel: shape type = \"wheel\" (or a cylinder with axis = \"y\")",
+            "rig_wrong_shape",
+        ),
+    ];
+    for (from, to, expected, name) in cases {
+        let (p, e) = body_err(name, from, to);
+        assert_eq!(e, expected.replace("{}", &p.display().to_string()), "case {name}");
+    }
+}
+
+#[test]
+fn mesh_bodies_need_a_readable_watertight_file() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scene_errors");
+    std::fs::create_dir_all(&dir).expect("tmp");
+    // An open box: five faces of a cube.
+    std::fs::write(dir.join("open.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nf 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\n").expect("write");
+    let body = "\n[[bodies]]\nname = \"lid\"\nshape = { type = \"mesh\", file = \"open.obj\", scale = 0.1 }\nmass = 1.0\nposition = [0.2, 0.2, 0.4]\n";
+    let (p, e) = err("mesh_open", &format!("{BASE}{body}"));
+    assert!(
+        e.starts_with(&format!(
+            "{}:26: key `bodies[0].shape.file`: {}: the mesh is not watertight",
+            p.display(),
+            dir.join("open.obj").display()
+        )),
+        "{e}"
+    );
+    let missing = body.replace("open.obj", "nowhere.stl");
+    let (p, e) = err("mesh_missing", &format!("{BASE}{missing}"));
+    assert!(
+        e.starts_with(&format!(
+            "{}:26: key `bodies[0].shape.file`: {}: cannot read",
+            p.display(),
+            dir.join("nowhere.stl").display()
+        )),
+        "{e}"
+    );
 }

@@ -1,8 +1,29 @@
 //! # regolith-coupling
 //!
-//! Will hold `FsiSystem { fluid, rigid, interface }`: the co-simulation of SPH soil
-//! (`regolith-fsi`) with rapier bodies (`regolith-rigid`) through BCE markers generated from
-//! each body's parry3d shape, the body-state → marker-state update, the marker-force → body
-//! wrench reduction averaged over the exchange interval, and the exchange schedule.
-//!
-//! Nothing here yet: the crate is filled by the rigid-coupling work.
+//! `FsiSystem { fluid, rigid, interface }`: SPH soil (`regolith-fsi`) coupled to rapier bodies
+//! (`regolith-rigid`) through BCE markers generated from each body's shape, split as in
+//! Chrono's `ChFsiSystem` / `ChFsiInterface`: what crosses the interface is body states (pose,
+//! velocities, accelerations; world frame) in, and a force and torque at each body's centre of
+//! mass (world frame) out. The exchange schedule and its lag are documented in [`FsiSystem`]'s
+//! module, [`system`].
+#![warn(missing_docs)]
+
+mod markers;
+pub mod system;
+
+pub use markers::{check_watertight, shape_markers};
+pub use system::{ExchangeReport, FsiBody, FsiInterface, FsiSystem, SoilInit, Wrench, extrapolate};
+
+/// Errors of the coupling layer.
+#[derive(Debug, thiserror::Error)]
+pub enum CouplingError {
+    /// A description is invalid.
+    #[error("{0}")]
+    Invalid(String),
+    /// A mesh cannot be used for markers.
+    #[error("{0}")]
+    Mesh(String),
+    /// The soil solver rejected its inputs.
+    #[error("soil solver: {0}")]
+    Solver(regolith_fsi::SolverError),
+}

@@ -8,9 +8,11 @@
 //! until `reset_forces`), and body states with positions, velocities and accelerations.
 #![warn(missing_docs)]
 
+mod mesh_io;
 mod shape;
 mod world;
 
+pub use mesh_io::{MeshError, TriangleMesh, load_mesh};
 pub use shape::{Axis, Grousers, Pose, ShapeDesc, quat_mul, quat_rotate};
 pub use world::{
     BodyDesc, BodyId, BodyState, JointDesc, JointId, JointKind, MassSpec, Motion, RigidWorld, VelocityMotor,

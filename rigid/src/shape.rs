@@ -209,9 +209,217 @@ impl ShapeDesc {
     }
 }
 
+impl ShapeDesc {
+    /// Which of the body-frame points lie inside the shape grown by `margin` (m). Meshes use
+    /// a parity test on a ray along +x plus the distance to the surface.
+    pub fn contains_points(&self, points: &[[f64; 3]], margin: f64) -> Vec<bool> {
+        let mut inside = vec![false; points.len()];
+        self.mark_inside(&Pose::default(), points, margin, &mut inside);
+        inside
+    }
+
+    fn mark_inside(&self, at: &Pose, points: &[[f64; 3]], m: f64, inside: &mut [bool]) {
+        let inv_r = [-at.rotation[0], -at.rotation[1], -at.rotation[2], at.rotation[3]];
+        let local = |p: [f64; 3]| {
+            quat_rotate(inv_r, [p[0] - at.translation[0], p[1] - at.translation[1], p[2] - at.translation[2]])
+        };
+        let along = |p: [f64; 3], axis: Axis| match axis {
+            Axis::X => (p[0], (p[1] * p[1] + p[2] * p[2]).sqrt()),
+            Axis::Y => (p[1], (p[0] * p[0] + p[2] * p[2]).sqrt()),
+            Axis::Z => (p[2], (p[0] * p[0] + p[1] * p[1]).sqrt()),
+        };
+        match self {
+            Self::Compound(parts) => {
+                for (p, s) in parts {
+                    s.mark_inside(&at.compose(p), points, m, inside);
+                }
+                return;
+            }
+            Self::Wheel { radius, width, grousers } => {
+                Self::Cylinder { radius: *radius, length: *width, axis: Axis::Y }.mark_inside(at, points, m, inside);
+                if let Some(g) = grousers {
+                    for k in 0..g.count {
+                        let angle = 360.0 * k as f64 / g.count as f64;
+                        let rot = Pose::from_rpy_deg([0.0; 3], [0.0, angle, 0.0]);
+                        let centre = rot.rotate([0.0, 0.0, radius + 0.5 * g.height]);
+                        let plate = Self::Box { size: [g.thickness, *width, g.height] };
+                        plate.mark_inside(
+                            &at.compose(&Pose { translation: centre, rotation: rot.rotation }),
+                            points,
+                            m,
+                            inside,
+                        );
+                    }
+                }
+                return;
+            }
+            Self::Mesh { vertices, indices } => {
+                for (flag, p) in inside.iter_mut().zip(points) {
+                    if !*flag {
+                        let q = local(*p);
+                        *flag = mesh_contains(vertices, indices, q) || mesh_distance(vertices, indices, q) <= m;
+                    }
+                }
+                return;
+            }
+            _ => {}
+        }
+        for (flag, p) in inside.iter_mut().zip(points) {
+            if *flag {
+                continue;
+            }
+            let q = local(*p);
+            *flag = match self {
+                Self::Box { size } => (0..3).all(|k| q[k].abs() <= 0.5 * size[k] + m),
+                Self::Sphere { radius } => q[0] * q[0] + q[1] * q[1] + q[2] * q[2] <= (radius + m).powi(2),
+                Self::Cylinder { radius, length, axis } => {
+                    let (a, r) = along(q, *axis);
+                    a.abs() <= 0.5 * length + m && r <= radius + m
+                }
+                Self::Cone { radius, height } => {
+                    let z = q[2] + 0.5 * height; // from the apex
+                    let r = (q[0] * q[0] + q[1] * q[1]).sqrt();
+                    let slant = (radius * radius + height * height).sqrt();
+                    z >= -m && z <= height + m && r <= z.max(0.0) * radius / height + m * slant / height
+                }
+                _ => false,
+            };
+        }
+    }
+}
+
+/// Parity of crossings of a ray from `p` along +x with the mesh's triangles.
+fn mesh_contains(v: &[[f64; 3]], t: &[[u32; 3]], p: [f64; 3]) -> bool {
+    let mut crossings = 0;
+    for tri in t {
+        let [a, b, c] = tri.map(|i| v[i as usize]);
+        // Möller–Trumbore with direction (1, 0, 0); a slight tilt avoids edge-on hits.
+        let d = [1.0, 1.234e-7, 2.345e-7];
+        let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let h = [d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2], d[0] * e2[1] - d[1] * e2[0]];
+        let det = e1[0] * h[0] + e1[1] * h[1] + e1[2] * h[2];
+        if det.abs() < 1e-18 {
+            continue;
+        }
+        let f = 1.0 / det;
+        let s = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+        let u = f * (s[0] * h[0] + s[1] * h[1] + s[2] * h[2]);
+        if !(0.0..=1.0).contains(&u) {
+            continue;
+        }
+        let q = [s[1] * e1[2] - s[2] * e1[1], s[2] * e1[0] - s[0] * e1[2], s[0] * e1[1] - s[1] * e1[0]];
+        let w = f * (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]);
+        if w < 0.0 || u + w > 1.0 {
+            continue;
+        }
+        if f * (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) > 0.0 {
+            crossings += 1;
+        }
+    }
+    crossings % 2 == 1
+}
+
+/// Distance from `p` to the nearest triangle of the mesh (m).
+fn mesh_distance(v: &[[f64; 3]], t: &[[u32; 3]], p: [f64; 3]) -> f64 {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let mut best = f64::INFINITY;
+    for tri in t {
+        let [a, b, c] = tri.map(|i| v[i as usize]);
+        // Closest point on a triangle (Ericson, Real-Time Collision Detection, 5.1.5).
+        let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
+        let (d1, d2) = (dot(ab, ap), dot(ac, ap));
+        let q = if d1 <= 0.0 && d2 <= 0.0 {
+            a
+        } else {
+            let bp = sub(p, b);
+            let (d3, d4) = (dot(ab, bp), dot(ac, bp));
+            let cp = sub(p, c);
+            let (d5, d6) = (dot(ab, cp), dot(ac, cp));
+            let vc = d1 * d4 - d3 * d2;
+            let vb = d5 * d2 - d1 * d6;
+            let va = d3 * d6 - d5 * d4;
+            if d3 >= 0.0 && d4 <= d3 {
+                b
+            } else if d6 >= 0.0 && d5 <= d6 {
+                c
+            } else if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+                let s = d1 / (d1 - d3);
+                [a[0] + s * ab[0], a[1] + s * ab[1], a[2] + s * ab[2]]
+            } else if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+                let s = d2 / (d2 - d6);
+                [a[0] + s * ac[0], a[1] + s * ac[1], a[2] + s * ac[2]]
+            } else if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+                let s = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+                [b[0] + s * (c[0] - b[0]), b[1] + s * (c[1] - b[1]), b[2] + s * (c[2] - b[2])]
+            } else {
+                let den = 1.0 / (va + vb + vc);
+                let (s, u) = (vb * den, vc * den);
+                [a[0] + ab[0] * s + ac[0] * u, a[1] + ab[1] * s + ac[1] * u, a[2] + ab[2] * s + ac[2] * u]
+            }
+        };
+        let d = sub(p, q);
+        best = best.min(dot(d, d).sqrt());
+    }
+    best
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn containment_of_primitives_and_meshes() {
+        let pts = [[0.0, 0.0, 0.0], [0.049, 0.0, 0.0], [0.06, 0.0, 0.0], [0.0, 0.0, -0.024]];
+        assert_eq!(ShapeDesc::Sphere { radius: 0.05 }.contains_points(&pts, 0.0), vec![true, true, false, true]);
+        assert_eq!(ShapeDesc::Sphere { radius: 0.05 }.contains_points(&pts, 0.011), vec![true, true, true, true]);
+        let cone = ShapeDesc::Cone { radius: 0.02, height: 0.05 };
+        // apex at z = −0.025: a point just above the apex on the axis is inside, one beside it not.
+        assert_eq!(
+            cone.contains_points(&[[0.0, 0.0, -0.024], [0.01, 0.0, -0.024], [0.0, 0.0, 0.03]], 0.0),
+            vec![true, false, false]
+        );
+        let cube = ShapeDesc::Mesh {
+            vertices: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 1.0],
+                [1.0, 1.0, 1.0],
+                [0.0, 1.0, 1.0],
+            ],
+            indices: vec![
+                [0, 2, 1],
+                [0, 3, 2],
+                [4, 5, 6],
+                [4, 6, 7],
+                [0, 1, 5],
+                [0, 5, 4],
+                [1, 2, 6],
+                [1, 6, 5],
+                [2, 3, 7],
+                [2, 7, 6],
+                [3, 0, 4],
+                [3, 4, 7],
+            ],
+        };
+        assert_eq!(
+            cube.contains_points(&[[0.5, 0.5, 0.5], [1.5, 0.5, 0.5], [1.05, 0.5, 0.5], [0.5, 0.5, -0.2]], 0.1),
+            vec![true, false, true, false]
+        );
+        let wheel = ShapeDesc::Wheel {
+            radius: 0.1,
+            width: 0.05,
+            grousers: Some(Grousers { count: 4, height: 0.02, thickness: 0.01 }),
+        };
+        assert_eq!(
+            wheel.contains_points(&[[0.0, 0.0, 0.11], [0.0, 0.0, -0.11], [0.08, 0.0, 0.08], [0.0, 0.03, 0.0]], 0.0),
+            vec![true, true, false, false]
+        );
+    }
 
     #[test]
     fn rpy_rotates_as_documented() {

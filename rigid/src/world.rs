@@ -48,6 +48,8 @@ pub struct BodyDesc {
     pub motion: Motion,
     /// Coulomb friction with other bodies and walls.
     pub friction: f64,
+    /// Whether it collides with other bodies and walls (rig frames and carriages do not).
+    pub collides: bool,
 }
 
 /// A velocity motor on a joint's free axis.
@@ -161,6 +163,7 @@ struct BodyRecord {
     motion: Motion,
     force: [f64; 3],
     torque: [f64; 3],
+    extra: [f64; 3],
     linacc: [f64; 3],
     angacc: [f64; 3],
     mass: f64,
@@ -187,8 +190,7 @@ pub struct RigidWorld {
 impl RigidWorld {
     /// An empty world with the given gravity (m/s², world frame).
     pub fn new(gravity: [f64; 3]) -> Self {
-        let mut world = PhysicsWorld::default();
-        world.gravity = v3(gravity);
+        let world = PhysicsWorld { gravity: v3(gravity), ..Default::default() };
         Self { world, bodies: Vec::new(), joints: Vec::new(), time: 0.0 }
     }
 
@@ -257,7 +259,11 @@ impl RigidWorld {
             return Err(RigidError::Invalid(format!("body \"{}\": mass and density must be positive", desc.name)));
         }
         for (p, collider) in colliders(&desc.shape, &Pose::default())? {
-            let c = collider.position(pose(&p)).density(density as Real).friction(desc.friction as Real).build();
+            let mut c = collider.position(pose(&p)).density(density as Real).friction(desc.friction as Real);
+            if !desc.collides {
+                c = c.collision_groups(InteractionGroups::none());
+            }
+            let c = c.build();
             self.world.colliders.insert_with_parent(c, handle, &mut self.world.bodies);
         }
         let mass = f64::from(self.world.bodies[handle].mass());
@@ -267,6 +273,7 @@ impl RigidWorld {
             motion: desc.motion.clone(),
             force: [0.0; 3],
             torque: [0.0; 3],
+            extra: [0.0; 3],
             linacc: [0.0; 3],
             angacc: [0.0; 3],
             mass,
@@ -291,6 +298,7 @@ impl RigidWorld {
             pose: Pose::translation(center),
             motion: Motion::Fixed,
             friction,
+            collides: true,
         })
     }
 
@@ -298,7 +306,7 @@ impl RigidWorld {
     pub fn add_joint(&mut self, j: &JointDesc) -> Result<JointId, RigidError> {
         let (h1, h2) = (self.bodies[j.body1.0].handle, self.bodies[j.body2.0].handle);
         let n = (j.axis[0] * j.axis[0] + j.axis[1] * j.axis[1] + j.axis[2] * j.axis[2]).sqrt();
-        if !(n > 0.0) {
+        if n.is_nan() || n <= 0.0 {
             return Err(RigidError::Invalid(format!("joint \"{}\": zero axis", j.name)));
         }
         let axis = [j.axis[0] / n, j.axis[1] / n, j.axis[2] / n];
@@ -348,6 +356,12 @@ impl RigidWorld {
         let rec = &mut self.bodies[b.0];
         rec.force = force;
         rec.torque = torque;
+    }
+
+    /// Sets a constant force at a body's centre of mass applied in addition to the wrench
+    /// (a test load, a towing force), world frame (N).
+    pub fn set_extra_force(&mut self, b: BodyId, force: [f64; 3]) {
+        self.bodies[b.0].extra = force;
     }
 
     /// Changes a prescribed body's velocity (ignored for other motions).
@@ -404,7 +418,7 @@ impl RigidWorld {
                 Motion::Free => {
                     body.reset_forces(true);
                     body.reset_torques(true);
-                    body.add_force(v3(rec.force), true);
+                    body.add_force(v3(add(rec.force, rec.extra)), true);
                     body.add_torque(v3(rec.torque), true);
                 }
                 Motion::Fixed => {}

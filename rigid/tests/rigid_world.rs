@@ -14,6 +14,7 @@ fn body(name: &str, shape: ShapeDesc, mass: f64, at: [f64; 3], motion: Motion) -
         pose: Pose::translation(at),
         motion,
         friction: 0.5,
+        collides: true,
     }
 }
 
@@ -25,8 +26,7 @@ fn a_free_body_falls_exactly_as_in_plain_rapier() {
         .expect("body");
     w.add_fixed_box("floor", [-1.0, -1.0, -0.1], [1.0, 1.0, 0.0], 0.5).expect("floor");
 
-    let mut r = PhysicsWorld::default();
-    r.gravity = Vector::new(0.0, 0.0, -9.81);
+    let mut r = PhysicsWorld { gravity: Vector::new(0.0, 0.0, -9.81), ..Default::default() };
     let h =
         r.bodies.insert(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.0, 1.0)).can_sleep(false).build());
     let vol = 0.2 * 0.3 * 0.1;
@@ -159,4 +159,72 @@ fn invalid_descriptions_are_errors() {
         w.add_body(&body("a", ShapeDesc::Sphere { radius: 1.0 }, 1.0, [0.0; 3], Motion::Free)).is_err(),
         "duplicate name"
     );
+}
+
+#[test]
+fn positions_integrate_the_reported_velocity() {
+    let mut w = RigidWorld::new([0.0, 0.0, -9.81]);
+    let b = w
+        .add_body(&body("box", ShapeDesc::Box { size: [0.1, 0.1, 0.04] }, 4.0, [0.0, 0.0, 1.0], Motion::Free))
+        .expect("body");
+    w.set_wrench(b, [0.0, 0.0, 1.5 * 4.0 * 9.81], [0.0; 3]);
+    let dt = 1e-3;
+    let mut z = w.state(b).com[2];
+    for _ in 0..500 {
+        w.step(dt);
+        let s = w.state(b);
+        // Rapier takes 4 substeps per step: under a constant acceleration a the position moves
+        // v_n dt + (k + 1)/(2k) a dt² = v_n dt + 0.625 a dt² (a = g/2 here).
+        let v_old = s.linvel[2] - 0.5 * 9.81 * dt;
+        let expect = z + v_old * dt + 0.625 * 0.5 * 9.81 * dt * dt;
+        assert!((s.com[2] - expect).abs() < 1e-6, "z {} vs {expect}", s.com[2]);
+        z = s.com[2];
+    }
+    assert!((w.state(b).linvel[2] - 0.5 * 9.81 * 0.5).abs() < 1e-3);
+}
+
+#[test]
+fn a_carriage_on_a_moving_sled_drops_freely_and_rolls_its_wheel() {
+    // The single-wheel rig without soil: sled (prescribed x) —prismatic z→ carriage —revolute y→
+    // wheel. The wheel must fall to the floor and then roll along with the sled.
+    let mut w = RigidWorld::new([0.0, 0.0, -9.81]);
+    w.add_fixed_box("floor", [-5.0, -1.0, -0.1], [5.0, 1.0, 0.0], 0.8).expect("floor");
+    let c = [0.0, 0.0, 0.3];
+    let ghost = |name: &str, motion: Motion| BodyDesc {
+        name: name.into(),
+        shape: ShapeDesc::Box { size: [0.05; 3] },
+        mass: MassSpec::Mass(1.0),
+        pose: Pose::translation(c),
+        motion,
+        friction: 0.0,
+        collides: false,
+    };
+    let sled =
+        w.add_body(&ghost("sled", Motion::Prescribed { linvel: [0.1, 0.0, 0.0], angvel: [0.0; 3] })).expect("sled");
+    let carriage = w.add_body(&ghost("carriage", Motion::Free)).expect("carriage");
+    let wheel = w
+        .add_body(&body("wheel", ShapeDesc::Wheel { radius: 0.1, width: 0.05, grousers: None }, 2.0, c, Motion::Free))
+        .expect("wheel");
+    let joint = |name: &str, b1, b2, kind, axis| JointDesc {
+        name: name.into(),
+        body1: b1,
+        body2: b2,
+        kind,
+        anchor: c,
+        axis,
+        motor: None,
+    };
+    w.add_joint(&joint("vertical", sled, carriage, JointKind::Prismatic, [0.0, 0.0, 1.0])).expect("prismatic");
+    w.add_joint(&JointDesc {
+        motor: Some(VelocityMotor { target: 1.0, max_effort: 100.0 }),
+        ..joint("axle", carriage, wheel, JointKind::Revolute, [0.0, 1.0, 0.0])
+    })
+    .expect("revolute");
+    for _ in 0..1000 {
+        w.step(1e-3);
+    }
+    let s = w.state(wheel);
+    assert!((s.origin[2] - 0.1).abs() < 5e-3, "the wheel rests on the floor: z = {}", s.origin[2]);
+    assert!((s.linvel[0] - 0.1).abs() < 1e-3, "it follows the sled: vx = {}", s.linvel[0]);
+    assert!((s.angvel[1] - 1.0).abs() < 0.05, "it spins at the motor speed: ω = {:?}", s.angvel);
 }

@@ -139,6 +139,9 @@ pub enum Command {
         /// Override a scene key, e.g. `--set simulation.end_time=0.5` (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE", value_parser = crate::scene::parse_set)]
         sets: Vec<(String, toml::Value)>,
+        /// Slip ratios for a single-wheel rig, e.g. `--slips 0,0.2,0.4` (overrides rig.slips).
+        #[arg(long, value_name = "S,S,...", value_delimiter = ',')]
+        slips: Option<Vec<f64>>,
         /// No progress output.
         #[arg(long)]
         quiet: bool,
@@ -198,7 +201,14 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Bench { particles, model, backend, precision, steps, warmup, json } => {
             bench::run(particles, model, backend, precision, steps, warmup, json.as_deref())
         }
-        Command::Run { scene, out, backend, precision, sets, quiet } => {
+        Command::Run { scene, out, backend, precision, sets, slips, quiet } => {
+            let mut sets = sets;
+            if let Some(s) = slips {
+                sets.push((
+                    "rig.slips".to_string(),
+                    toml::Value::Array(s.into_iter().map(toml::Value::Float).collect()),
+                ));
+            }
             run::run(&scene, &out, backend, precision, &sets, quiet)
         }
     }

@@ -15,6 +15,9 @@ pub(crate) struct SceneFile {
     pub terrain: Option<TerrainFile>,
     #[serde(default)]
     pub soil_blocks: Vec<SoilBlockFile>,
+    #[serde(default)]
+    pub bodies: Vec<BodyFile>,
+    pub rig: Option<RigFile>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -28,6 +31,7 @@ pub(crate) struct SimulationFile {
     pub gravity: Option<[f64; 3]>,
     pub backend: Option<BackendName>,
     pub precision: Option<PrecisionName>,
+    pub exchange_interval: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
@@ -127,4 +131,96 @@ pub(crate) struct SoilBlockFile {
 pub(crate) enum BlockShapeName {
     Box,
     Cylinder,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct BodyFile {
+    pub name: Option<String>,
+    pub shape: Option<ShapeFile>,
+    pub mass: Option<f64>,
+    pub density: Option<f64>,
+    pub position: Option<[f64; 3]>,
+    pub orientation: Option<[f64; 3]>,
+    pub motion: Option<MotionFile>,
+    pub fsi: Option<bool>,
+    pub bce_layers: Option<i64>,
+    pub friction: Option<f64>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum AxisName {
+    X,
+    Y,
+    Z,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub(crate) enum ScaleFile {
+    Uniform(f64),
+    PerAxis([f64; 3]),
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub(crate) enum ShapeFile {
+    Box {
+        size: [f64; 3],
+    },
+    Sphere {
+        radius: f64,
+    },
+    Cylinder {
+        radius: f64,
+        length: f64,
+        axis: Option<AxisName>,
+    },
+    Cone {
+        radius: f64,
+        height: f64,
+    },
+    Mesh {
+        file: String,
+        scale: Option<ScaleFile>,
+    },
+    Wheel {
+        radius: f64,
+        width: f64,
+        grousers: Option<u32>,
+        grouser_height: Option<f64>,
+        grouser_thickness: Option<f64>,
+    },
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub(crate) enum MotionFile {
+    Free,
+    Fixed,
+    Prescribed { linear_velocity: Option<[f64; 3]>, angular_velocity: Option<[f64; 3]> },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum RigKind {
+    Plate,
+    Cone,
+    Wheel,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RigFile {
+    #[serde(rename = "type")]
+    pub kind: Option<RigKind>,
+    pub body: Option<String>,
+    pub speed: Option<f64>,
+    pub depth: Option<f64>,
+    pub load: Option<f64>,
+    pub sizes: Option<Vec<f64>>,
+    pub angular_velocity: Option<f64>,
+    pub slips: Option<Vec<f64>>,
+    pub tow_force: Option<f64>,
 }

@@ -51,9 +51,10 @@ pub use plan::describe;
 use crate::input::{InputError, parse_toml, read_text};
 use crate::material::{build_material, load_material_file};
 use file::{
-    BackendName, BlockShapeName, FreeSurfaceStressName, IntegratorName, KernelName, PrecisionName, SceneFile,
-    ShiftingName,
+    AxisName, BackendName, BlockShapeName, BodyFile, FreeSurfaceStressName, IntegratorName, KernelName, MotionFile,
+    PrecisionName, RigFile, RigKind, ScaleFile, SceneFile, ShapeFile, ShiftingName,
 };
+use regolith_rigid::{Axis, BodyDesc, Grousers, MassSpec, Motion, Pose, ShapeDesc};
 
 /// Which compute backend runs the soil.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -116,6 +117,74 @@ pub struct SoilSpec {
     pub key: String,
 }
 
+/// A body of a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodySpec {
+    /// The rigid body.
+    pub desc: BodyDesc,
+    /// Whether it interacts with the soil (gets BCE markers).
+    pub fsi: bool,
+    /// Marker layers.
+    pub bce_layers: usize,
+    /// The key it came from (`bodies[1]`).
+    pub key: String,
+}
+
+/// How a plate is driven.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PlateControl {
+    /// Pushed down at a constant speed (m/s).
+    Speed(f64),
+    /// Loaded with a constant downward force (N) on top of its weight.
+    Load(f64),
+}
+
+/// How a wheel's carriage moves.
+#[derive(Clone, Debug, PartialEq)]
+pub enum WheelDrive {
+    /// Carriage speed prescribed for each slip ratio `s`: `v = ω R (1 − s)`, one run per slip.
+    Slips(Vec<f64>),
+    /// Free carriage pulled back by a constant towing force (N); slip is an output.
+    Tow(f64),
+}
+
+/// A test rig.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RigSpec {
+    /// Plate sinkage (bevameter).
+    Plate {
+        /// Index into [`Scene::bodies`].
+        body: usize,
+        /// Speed or load control.
+        control: PlateControl,
+        /// Sinkage at which the push stops (m).
+        depth: f64,
+        /// Plate sizes to run (radius of a circular plate, smaller side of a rectangular
+        /// one, m); empty runs the body as given.
+        sizes: Vec<f64>,
+    },
+    /// Cone penetrometer.
+    Cone {
+        /// Index into [`Scene::bodies`].
+        body: usize,
+        /// Push speed (m/s).
+        speed: f64,
+        /// Depth of the cone base at which the push stops (m).
+        depth: f64,
+    },
+    /// Single-wheel test rig.
+    Wheel {
+        /// Index into [`Scene::bodies`].
+        body: usize,
+        /// Vertical load on the soil, wheel weight included (N).
+        load: f64,
+        /// Wheel angular velocity (rad/s).
+        angular_velocity: f64,
+        /// Slip list or towing force.
+        drive: WheelDrive,
+    },
+}
+
 /// A validated scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -135,6 +204,12 @@ pub struct Scene {
     pub container: Option<Aabb>,
     /// Soil regions.
     pub soil: Vec<SoilSpec>,
+    /// Rigid bodies.
+    pub bodies: Vec<BodySpec>,
+    /// Test rig, if any.
+    pub rig: Option<RigSpec>,
+    /// Soil–body exchange interval (s).
+    pub exchange_interval: f64,
 }
 
 fn key_err(path: &Path, source: &str, key: impl Into<String>, message: impl Into<String>) -> InputError {
@@ -514,7 +589,322 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
             ));
         }
     }
-    Ok(Scene { path: path.to_path_buf(), end_time, backend, precision, solver, materials, container, soil })
+    let exchange_interval = sim.exchange_interval.unwrap_or(1e-3);
+    if !(exchange_interval.is_finite() && exchange_interval > 0.0 && exchange_interval <= end_time) {
+        return Err(e(
+            "simulation.exchange_interval",
+            format!("must be in (0, end_time = {end_time}] s (got {exchange_interval})"),
+        ));
+    }
+    let mut bodies = Vec::new();
+    for (i, b) in file.bodies.iter().enumerate() {
+        let spec = resolve_body(path, source, dir, i, b, bce_layers as usize, &bodies)?;
+        bodies.push(spec);
+    }
+    let rig = match &file.rig {
+        None => None,
+        Some(r) => Some(resolve_rig(path, source, r, &bodies, &file.bodies)?),
+    };
+    Ok(Scene {
+        path: path.to_path_buf(),
+        end_time,
+        backend,
+        precision,
+        solver,
+        materials,
+        container,
+        soil,
+        bodies,
+        rig,
+        exchange_interval,
+    })
+}
+
+fn resolve_body(
+    path: &Path,
+    source: &str,
+    dir: &Path,
+    i: usize,
+    b: &BodyFile,
+    default_layers: usize,
+    earlier: &[BodySpec],
+) -> Result<BodySpec, InputError> {
+    let key = format!("bodies[{i}]");
+    let e = |k: &str, msg: String| key_err(path, source, format!("{key}.{k}"), msg);
+    let name = b.name.clone().ok_or_else(|| e("name", "is required: the body's name in outputs".into()))?;
+    if name.trim().is_empty() || name.contains(',') || name.contains('/') {
+        return Err(e("name", format!("\"{name}\" is not allowed: a non-empty name without ',' or '/'")));
+    }
+    if earlier.iter().any(|x| x.desc.name == name) {
+        return Err(e("name", format!("\"{name}\" is used twice; body names must be unique")));
+    }
+    let pos = |k: &str, v: f64| -> Result<f64, InputError> {
+        if v.is_finite() && v > 0.0 { Ok(v) } else { Err(e(&format!("shape.{k}"), format!("must be > 0 m (got {v})"))) }
+    };
+    let shape_file = b.shape.clone().ok_or_else(|| {
+        e(
+            "shape",
+            "is required: { type = \"box\" | \"sphere\" | \"cylinder\" | \"cone\" | \"mesh\" | \"wheel\", ... }".into(),
+        )
+    })?;
+    let fsi = b.fsi.unwrap_or(true);
+    let shape = match shape_file {
+        ShapeFile::Box { size } => {
+            for s in size {
+                pos("size", s)?;
+            }
+            ShapeDesc::Box { size }
+        }
+        ShapeFile::Sphere { radius } => ShapeDesc::Sphere { radius: pos("radius", radius)? },
+        ShapeFile::Cylinder { radius, length, axis } => ShapeDesc::Cylinder {
+            radius: pos("radius", radius)?,
+            length: pos("length", length)?,
+            axis: match axis.unwrap_or(AxisName::Z) {
+                AxisName::X => Axis::X,
+                AxisName::Y => Axis::Y,
+                AxisName::Z => Axis::Z,
+            },
+        },
+        ShapeFile::Cone { radius, height } => {
+            ShapeDesc::Cone { radius: pos("radius", radius)?, height: pos("height", height)? }
+        }
+        ShapeFile::Mesh { file, scale } => {
+            let scale = match scale {
+                None => [1.0; 3],
+                Some(ScaleFile::Uniform(s)) => [s; 3],
+                Some(ScaleFile::PerAxis(s)) => s,
+            };
+            if scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+                return Err(e("shape.scale", format!("must be positive (got {scale:?})")));
+            }
+            let mesh =
+                regolith_rigid::load_mesh(&dir.join(&file), scale).map_err(|m| e("shape.file", m.to_string()))?;
+            if fsi {
+                regolith_coupling::check_watertight(&mesh.vertices, &mesh.indices)
+                    .map_err(|m| e("shape.file", format!("{}: {m}", dir.join(&file).display())))?;
+            }
+            ShapeDesc::Mesh { vertices: mesh.vertices, indices: mesh.indices }
+        }
+        ShapeFile::Wheel { radius, width, grousers, grouser_height, grouser_thickness } => {
+            let radius = pos("radius", radius)?;
+            let width = pos("width", width)?;
+            let grousers = match grousers.unwrap_or(0) {
+                0 => {
+                    if grouser_height.is_some() || grouser_thickness.is_some() {
+                        return Err(e(
+                            "shape.grousers",
+                            "is 0 but grouser_height or grouser_thickness is given".into(),
+                        ));
+                    }
+                    None
+                }
+                n => Some(Grousers {
+                    count: n,
+                    height: pos(
+                        "grouser_height",
+                        grouser_height
+                            .ok_or_else(|| e("shape.grouser_height", "is required when grousers > 0 (m)".into()))?,
+                    )?,
+                    thickness: pos(
+                        "grouser_thickness",
+                        grouser_thickness
+                            .ok_or_else(|| e("shape.grouser_thickness", "is required when grousers > 0 (m)".into()))?,
+                    )?,
+                }),
+            };
+            ShapeDesc::Wheel { radius, width, grousers }
+        }
+    };
+    let mass = match (b.mass, b.density) {
+        (Some(_), Some(_)) => return Err(e("mass", "and density are both given: give one".into())),
+        (None, None) => return Err(e("mass", "is required (kg), or give density (kg/m³)".into())),
+        (Some(m), None) if m.is_finite() && m > 0.0 => MassSpec::Mass(m),
+        (None, Some(d)) if d.is_finite() && d > 0.0 => MassSpec::Density(d),
+        (Some(m), None) => return Err(e("mass", format!("must be > 0 kg (got {m})"))),
+        (None, Some(d)) => return Err(e("density", format!("must be > 0 kg/m³ (got {d})"))),
+    };
+    let position =
+        b.position.ok_or_else(|| e("position", "is required: [x, y, z] of the body's centre in m".into()))?;
+    if position.iter().any(|x| !x.is_finite()) {
+        return Err(e("position", "must be finite".into()));
+    }
+    let orientation = b.orientation.unwrap_or([0.0; 3]);
+    if orientation.iter().any(|x| !x.is_finite()) {
+        return Err(e("orientation", "must be finite roll, pitch, yaw in degrees".into()));
+    }
+    let motion = match b.motion.clone().unwrap_or(MotionFile::Free) {
+        MotionFile::Free => Motion::Free,
+        MotionFile::Fixed => Motion::Fixed,
+        MotionFile::Prescribed { linear_velocity, angular_velocity } => {
+            let l = linear_velocity.unwrap_or([0.0; 3]);
+            let a = angular_velocity.unwrap_or([0.0; 3]);
+            if l.iter().chain(&a).any(|x| !x.is_finite()) {
+                return Err(e("motion", "velocities must be finite".into()));
+            }
+            Motion::Prescribed { linvel: l, angvel: a.map(f64::to_radians) }
+        }
+    };
+    let layers = b.bce_layers.unwrap_or(default_layers as i64);
+    if !(1..=8).contains(&layers) {
+        return Err(e("bce_layers", format!("must be an integer in 1..=8 (got {layers})")));
+    }
+    if !fsi && b.bce_layers.is_some() {
+        return Err(e("bce_layers", "is set but fsi = false (the body has no markers)".into()));
+    }
+    let friction = b.friction.unwrap_or(0.5);
+    if !(friction.is_finite() && friction >= 0.0) {
+        return Err(e("friction", format!("must be ≥ 0 (got {friction})")));
+    }
+    Ok(BodySpec {
+        desc: BodyDesc {
+            name,
+            shape,
+            mass,
+            pose: Pose::from_rpy_deg(position, orientation),
+            motion,
+            friction,
+            collides: true,
+        },
+        fsi,
+        bce_layers: layers as usize,
+        key,
+    })
+}
+
+fn resolve_rig(
+    path: &Path,
+    source: &str,
+    r: &RigFile,
+    bodies: &[BodySpec],
+    files: &[BodyFile],
+) -> Result<RigSpec, InputError> {
+    let e = |k: &str, msg: String| key_err(path, source, format!("rig.{k}"), msg);
+    let kind = r.kind.ok_or_else(|| e("type", "is required: \"plate\", \"cone\" or \"wheel\"".into()))?;
+    let kind_name = match kind {
+        RigKind::Plate => "plate",
+        RigKind::Cone => "cone",
+        RigKind::Wheel => "wheel",
+    };
+    let name = r
+        .body
+        .as_ref()
+        .ok_or_else(|| e("body", "is required: the name of the [[bodies]] entry the rig drives".into()))?;
+    let body = bodies
+        .iter()
+        .position(|b| &b.desc.name == name)
+        .ok_or_else(|| e("body", format!("\"{name}\" is not a body of the scene")))?;
+    if !bodies[body].fsi {
+        return Err(e("body", format!("\"{name}\" has fsi = false: a rig measures the soil's force on it")));
+    }
+    if files[body].motion.is_some() {
+        return Err(key_err(
+            path,
+            source,
+            format!("{}.motion", bodies[body].key),
+            format!("is set, but the {kind_name} rig drives body \"{name}\"; remove it"),
+        ));
+    }
+    let forbid = |k: &str, present: bool| -> Result<(), InputError> {
+        if present { Err(e(k, format!("does not apply to a {kind_name} rig"))) } else { Ok(()) }
+    };
+    let positive = |k: &str, v: Option<f64>, unit: &str| -> Result<f64, InputError> {
+        let v = v.ok_or_else(|| e(k, format!("is required for a {kind_name} rig ({unit})")))?;
+        if v.is_finite() && v > 0.0 { Ok(v) } else { Err(e(k, format!("must be > 0 {unit} (got {v})"))) }
+    };
+    let shape = &bodies[body].desc.shape;
+    Ok(match kind {
+        RigKind::Plate => {
+            forbid("angular_velocity", r.angular_velocity.is_some())?;
+            forbid("slips", r.slips.is_some())?;
+            forbid("tow_force", r.tow_force.is_some())?;
+            match shape {
+                ShapeDesc::Cylinder { axis: Axis::Z, .. } | ShapeDesc::Box { .. } => {}
+                _ => {
+                    return Err(e(
+                        "body",
+                        format!(
+                            "\"{name}\" must be a plate: a cylinder with axis = \"z\" (circular) or a box (rectangular)"
+                        ),
+                    ));
+                }
+            }
+            let control = match (r.speed, r.load) {
+                (Some(_), Some(_)) => {
+                    return Err(e("speed", "and load are both given: a plate is speed- or load-controlled".into()));
+                }
+                (None, None) => return Err(e("speed", "is required (m/s, downward), or give load (N)".into())),
+                (Some(_), None) => PlateControl::Speed(positive("speed", r.speed, "m/s")?),
+                (None, Some(_)) => PlateControl::Load(positive("load", r.load, "N")?),
+            };
+            let depth = positive("depth", r.depth, "m")?;
+            let sizes = r.sizes.clone().unwrap_or_default();
+            if let Some(s) = sizes.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+                return Err(e("sizes", format!("must all be > 0 m (got {s})")));
+            }
+            RigSpec::Plate { body, control, depth, sizes }
+        }
+        RigKind::Cone => {
+            for (k, p) in [
+                ("load", r.load.is_some()),
+                ("sizes", r.sizes.is_some()),
+                ("angular_velocity", r.angular_velocity.is_some()),
+                ("slips", r.slips.is_some()),
+                ("tow_force", r.tow_force.is_some()),
+            ] {
+                forbid(k, p)?;
+            }
+            if !matches!(shape, ShapeDesc::Cone { .. }) {
+                return Err(e("body", format!("\"{name}\" must have shape type = \"cone\"")));
+            }
+            RigSpec::Cone { body, speed: positive("speed", r.speed, "m/s")?, depth: positive("depth", r.depth, "m")? }
+        }
+        RigKind::Wheel => {
+            for (k, p) in [("speed", r.speed.is_some()), ("depth", r.depth.is_some()), ("sizes", r.sizes.is_some())] {
+                forbid(k, p)?;
+            }
+            match shape {
+                ShapeDesc::Wheel { .. } | ShapeDesc::Cylinder { axis: Axis::Y, .. } => {}
+                _ => {
+                    return Err(e(
+                        "body",
+                        format!("\"{name}\" must be a wheel: shape type = \"wheel\" (or a cylinder with axis = \"y\")"),
+                    ));
+                }
+            }
+            let drive = match (&r.slips, r.tow_force) {
+                (Some(_), Some(_)) => {
+                    return Err(e("slips", "and tow_force are both given: prescribe slips or tow the carriage".into()));
+                }
+                (None, None) => {
+                    return Err(e(
+                        "slips",
+                        "is required (a list of slip ratios in [0, 1]), or give tow_force (N)".into(),
+                    ));
+                }
+                (Some(s), None) => {
+                    if s.is_empty() {
+                        return Err(e("slips", "must list at least one slip ratio".into()));
+                    }
+                    if let Some(x) = s.iter().find(|x| !(x.is_finite() && (0.0..=1.0).contains(*x))) {
+                        return Err(e("slips", format!("must be in [0, 1] (got {x})")));
+                    }
+                    WheelDrive::Slips(s.clone())
+                }
+                (None, Some(t)) => {
+                    if !(t.is_finite() && t >= 0.0) {
+                        return Err(e("tow_force", format!("must be ≥ 0 N (got {t})")));
+                    }
+                    WheelDrive::Tow(t)
+                }
+            };
+            RigSpec::Wheel {
+                body,
+                load: positive("load", r.load, "N")?,
+                angular_velocity: positive("angular_velocity", r.angular_velocity, "rad/s")?,
+                drive,
+            }
+        }
+    })
 }
 
 /// Bounding box of a soil region (m).

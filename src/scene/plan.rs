@@ -116,6 +116,65 @@ pub fn describe(scene: &Scene) -> String {
             c.min, c.max, sv.bce_layers, walls
         );
     }
+    let mut markers = 0usize;
+    for b in &scene.bodies {
+        let n = if b.fsi {
+            regolith_coupling::shape_markers(&b.desc.shape, sv.spacing, b.bce_layers).map(|m| m.len()).unwrap_or(0)
+        } else {
+            0
+        };
+        markers += n;
+        let motion = match &b.desc.motion {
+            regolith_rigid::Motion::Free => "free".to_string(),
+            regolith_rigid::Motion::Fixed => "fixed".to_string(),
+            regolith_rigid::Motion::Prescribed { linvel, angvel } => {
+                format!("prescribed v = {linvel:?} m/s, ω = {angvel:?} rad/s")
+            }
+            regolith_rigid::Motion::Waypoints(w) => format!("{} waypoints", w.len()),
+        };
+        let mass = match b.desc.mass {
+            regolith_rigid::MassSpec::Mass(m) => format!("{m} kg"),
+            regolith_rigid::MassSpec::Density(d) => format!("{d} kg/m³ ({:.3} kg)", d * b.desc.shape.volume()),
+        };
+        let _ = writeln!(
+            s,
+            "  body \"{}\": {}, {mass}, at {:?}, {motion}, {}",
+            b.desc.name,
+            shape_name(&b.desc.shape),
+            b.desc.pose.translation,
+            if b.fsi { format!("{n} BCE markers in {} layers", b.bce_layers) } else { "no soil contact".into() }
+        );
+    }
+    if let Some(r) = &scene.rig {
+        let line = match r {
+            super::RigSpec::Plate { body, control, depth, sizes } => format!(
+                "plate sinkage on \"{}\", {}, to {depth} m{}",
+                scene.bodies[*body].desc.name,
+                match control {
+                    super::PlateControl::Speed(v) => format!("pushed at {v} m/s"),
+                    super::PlateControl::Load(f) => format!("loaded with {f} N"),
+                },
+                if sizes.is_empty() { String::new() } else { format!(", plate sizes {sizes:?} m") }
+            ),
+            super::RigSpec::Cone { body, speed, depth } => format!(
+                "cone penetrometer \"{}\" pushed at {speed} m/s to a base depth of {depth} m",
+                scene.bodies[*body].desc.name
+            ),
+            super::RigSpec::Wheel { body, load, angular_velocity, drive } => format!(
+                "single wheel \"{}\", load {load} N, ω = {angular_velocity} rad/s, {}",
+                scene.bodies[*body].desc.name,
+                match drive {
+                    super::WheelDrive::Slips(s) => format!("slips {s:?} ({} runs of {} s)", s.len(), scene.end_time),
+                    super::WheelDrive::Tow(f) => format!("towed with {f} N"),
+                }
+            ),
+        };
+        let _ = writeln!(s, "  rig: {line}; the rig body starts in contact with the soil");
+    }
+    if !scene.bodies.is_empty() {
+        let _ =
+            writeln!(s, "  coupling: soil and bodies exchange state and wrenches every {} s", scene.exchange_interval);
+    }
     let dt_est = match sv.time_step {
         TimeStep::Fixed(dt) => dt,
         TimeStep::Adaptive { cfl, max } => (cfl * min_dt).min(max),
@@ -142,7 +201,7 @@ pub fn describe(scene: &Scene) -> String {
     let hardening = models.contains(&"mcc");
     let _ = writeln!(
         s,
-        "  effects: rheology {{{}}}, hardening {}, free surface {}, shifting {shifting}, artificial viscosity {}, bodies 0",
+        "  effects: rheology {{{}}}, hardening {}, free surface {}, shifting {shifting}, artificial viscosity {}, FSI bodies {}",
         models.join(", "),
         if hardening { "on" } else { "off" },
         match sv.free_surface_threshold {
@@ -155,7 +214,27 @@ pub fn describe(scene: &Scene) -> String {
             ),
             None => "off".into(),
         },
-        if sv.artificial_viscosity > 0.0 { "on" } else { "off" }
+        if sv.artificial_viscosity > 0.0 { "on" } else { "off" },
+        scene.bodies.iter().filter(|b| b.fsi).count()
     );
+    let _ = markers;
     s
+}
+
+fn shape_name(s: &regolith_rigid::ShapeDesc) -> String {
+    use regolith_rigid::ShapeDesc as S;
+    match s {
+        S::Box { size } => format!("box {size:?} m"),
+        S::Sphere { radius } => format!("sphere r = {radius} m"),
+        S::Cylinder { radius, length, axis } => format!("cylinder r = {radius} m, length {length} m along {axis:?}"),
+        S::Cone { radius, height } => {
+            format!("cone r = {radius} m, h = {height} m ({:.1}° apex)", 2.0 * (radius / height).atan().to_degrees())
+        }
+        S::Mesh { vertices, indices } => format!("mesh ({} vertices, {} triangles)", vertices.len(), indices.len()),
+        S::Wheel { radius, width, grousers } => format!(
+            "wheel r = {radius} m, width {width} m{}",
+            grousers.map(|g| format!(", {} grousers {} × {} m", g.count, g.height, g.thickness)).unwrap_or_default()
+        ),
+        S::Compound(p) => format!("compound of {} shapes", p.len()),
+    }
 }

@@ -114,6 +114,7 @@ pub struct CpuSph<T: Real> {
     steps: u64,
     c_max: f64,
     marker_impulse: [f64; 3],
+    owner_impulse: Vec<[f64; 3]>,
 }
 
 /// Calls a rate function instantiated for the effects that are on: each combination is its
@@ -234,6 +235,7 @@ impl<T: Real> CpuSph<T> {
             steps: 0,
             c_max: ref_cs,
             marker_impulse: [0.0; 3],
+            owner_impulse: vec![[0.0; 3]; markers.iter().map(|m| m.owner as usize + 1).max().unwrap_or(1)],
         })
     }
 
@@ -341,6 +343,11 @@ impl<T: Real> CpuSph<T> {
     /// Total impulse the markers have exerted on the soil since the start (N s).
     pub fn marker_impulse(&self) -> [f64; 3] {
         self.marker_impulse
+    }
+    /// Impulse the markers of each owner (0 = walls, k + 1 = body k) have exerted on the soil
+    /// since the start (N s).
+    pub fn owner_impulse(&self) -> &[[f64; 3]] {
+        &self.owner_impulse
     }
     /// Total mass of the active soil (kg).
     pub fn active_mass(&self) -> f64 {
@@ -546,6 +553,10 @@ impl<T: Real> CpuSph<T> {
             let f = self.ms_force[k].as_f64();
             for (t, fa) in total.iter_mut().zip(f) {
                 *t += fa;
+            }
+            let own = &mut self.owner_impulse[self.m_owner[o] as usize];
+            for (i, fa) in own.iter_mut().zip(f) {
+                *i -= dt * fa;
             }
         }
         for (imp, t) in self.marker_impulse.iter_mut().zip(total) {

@@ -1,0 +1,278 @@
+//! The co-simulation of SPH soil and rapier bodies.
+//!
+//! # Exchange schedule
+//! Time advances in exchange intervals Δ (`exchange_interval`). One interval [t, t + Δ]:
+//! 1. **Body states → markers.** Each FSI body's state at t (pose, velocities, accelerations
+//!    of the last rigid step) places its markers. During the interval the markers move with
+//!    the body's rigid motion extrapolated from t at constant velocity, so the soil never sees
+//!    a body standing still between exchanges.
+//! 2. **Fluid substeps** (the soil's own, usually adaptive, steps) cover [t, t + Δ] exactly.
+//!    After each, the force on every marker from the soil (the exact negative of what the soil
+//!    particles receive) is summed per body into a force and a torque about the body's centre
+//!    of mass, weighted by the substep length.
+//! 3. **Average.** The wrench is divided by Δ: the mean soil load over the interval.
+//! 4. **Rigid substeps** cover [t, t + Δ] with that wrench applied at each body's centre of
+//!    mass (rapier steps of at most `rigid_substep`).
+//!
+//! The first interval already runs with the soil's real force (the fluid goes first), so
+//! there is no zero-force start. The lag: the soil during an interval reacts to the body
+//! motion known at its start; the bodies during an interval feel the soil's mean force over
+//! that same interval. Both are first-order in Δ; keep Δ at the soil's time step or a small
+//! multiple of it (the default is 1 ms, about 10 to 20 soil steps for typical soils).
+
+use std::ops::Range;
+
+use regolith_fsi::cpu::CpuSph;
+use regolith_fsi::math::Vec3;
+use regolith_fsi::{MarkerInit, ParticleInit, Real, SolverError};
+use regolith_rigid::{BodyId, BodyState, Motion, RigidWorld, quat_mul, quat_rotate};
+
+use crate::CouplingError;
+
+/// A force (N) and a torque about the centre of mass (N m), world frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Wrench {
+    /// Force (N).
+    pub force: [f64; 3],
+    /// Torque about the centre of mass (N m).
+    pub torque: [f64; 3],
+}
+
+/// A body that interacts with the soil.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FsiBody {
+    /// The rigid body.
+    pub body: BodyId,
+    /// Its markers' positions in the body frame (m).
+    pub local: Vec<[f64; 3]>,
+    /// Where its markers sit in the soil solver's marker array.
+    pub markers: Range<usize>,
+}
+
+/// The body list and what crosses between soil and bodies.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FsiInterface {
+    /// FSI bodies.
+    pub bodies: Vec<FsiBody>,
+    /// Mean soil wrench on each body over the last exchange interval.
+    pub wrenches: Vec<Wrench>,
+}
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+/// A body's state advanced by τ at constant linear and angular velocity.
+pub fn extrapolate(s: &BodyState, tau: f64) -> BodyState {
+    let w = s.angvel;
+    let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+    let rotation = if n * tau > 0.0 {
+        let half = 0.5 * n * tau;
+        let k = half.sin() / n;
+        let dq = [w[0] * k, w[1] * k, w[2] * k, half.cos()];
+        quat_mul(dq, s.rotation)
+    } else {
+        s.rotation
+    };
+    let com = add(s.com, scale(s.linvel, tau));
+    // The origin keeps its body-frame offset from the centre of mass.
+    let offset_local = quat_rotate(conj(s.rotation), sub(s.origin, s.com));
+    let origin = add(com, quat_rotate(rotation, offset_local));
+    BodyState { origin, com, rotation, ..*s }
+}
+
+fn conj(q: [f64; 4]) -> [f64; 4] {
+    [-q[0], -q[1], -q[2], q[3]]
+}
+
+impl FsiInterface {
+    /// Places every FSI body's markers (position, velocity, acceleration) from its state.
+    pub fn place_markers<T: Real>(&self, fluid: &mut CpuSph<T>, states: &[BodyState]) {
+        let k = fluid.marker_kinematics_mut();
+        for (b, s) in self.bodies.iter().zip(states) {
+            for (i, local) in b.markers.clone().zip(&b.local) {
+                let x = s.to_world(*local);
+                k.pos[i] = Vec3::of(x);
+                k.vel[i] = Vec3::of(s.velocity_at(x));
+                k.acc[i] = Vec3::of(s.acceleration_at(x));
+            }
+        }
+    }
+
+    /// The soil's wrench on each body from the current marker forces, torques about `states`'
+    /// centres of mass.
+    pub fn wrenches<T: Real>(&self, fluid: &CpuSph<T>, states: &[BodyState]) -> Vec<Wrench> {
+        let f = fluid.marker_forces();
+        let x = fluid.marker_positions();
+        self.bodies
+            .iter()
+            .zip(states)
+            .map(|(b, s)| {
+                let mut w = Wrench::default();
+                for i in b.markers.clone() {
+                    let fi = f[i].as_f64();
+                    let r = sub(x[i].as_f64(), s.com);
+                    w.force = add(w.force, fi);
+                    w.torque = add(w.torque, cross(r, fi));
+                }
+                w
+            })
+            .collect()
+    }
+}
+
+/// What one exchange interval did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExchangeReport {
+    /// Time at the end of the interval (s).
+    pub time: f64,
+    /// Soil substeps taken.
+    pub fluid_steps: u32,
+    /// Rigid substeps taken.
+    pub rigid_steps: u32,
+    /// Largest soil particle speed at the end (m/s).
+    pub max_speed: f64,
+    /// Soil–soil and soil–marker pairs of the last substep.
+    pub pairs: usize,
+    /// Smallest soil step of the interval (s).
+    pub dt_min: f64,
+    /// Largest soil step of the interval (s).
+    pub dt_max: f64,
+}
+
+/// Soil, bodies and the interface between them.
+pub struct FsiSystem<T: Real> {
+    /// The SPH soil.
+    pub fluid: CpuSph<T>,
+    /// The rigid bodies.
+    pub rigid: RigidWorld,
+    /// What crosses between them.
+    pub interface: FsiInterface,
+    /// Exchange interval Δ (s).
+    pub exchange_interval: f64,
+    /// Largest rigid step (s).
+    pub rigid_substep: f64,
+    time: f64,
+}
+
+/// What the soil solver of an [`FsiSystem`] is built from.
+pub struct SoilInit<'a, T> {
+    /// Solver settings.
+    pub config: regolith_fsi::config::SolverConfig,
+    /// Materials.
+    pub materials: Vec<regolith_fsi::rheology::Material<T>>,
+    /// Soil particles.
+    pub particles: &'a [ParticleInit],
+    /// Fixed (wall) markers.
+    pub wall_markers: &'a [MarkerInit],
+    /// The neighbour grid's domain (min, max corners, m).
+    pub domain: ([f64; 3], [f64; 3]),
+}
+
+impl<T: Real> FsiSystem<T> {
+    /// Builds the system. Each `(body, local markers)` pair adds an FSI body whose markers are
+    /// placed from the rigid world's current state.
+    pub fn new(
+        soil: SoilInit<'_, T>,
+        rigid: RigidWorld,
+        fsi_bodies: Vec<(BodyId, Vec<[f64; 3]>)>,
+        exchange_interval: f64,
+    ) -> Result<Self, CouplingError> {
+        let SoilInit { config: fluid_config, materials, particles, wall_markers, domain } = soil;
+        if !(exchange_interval > 0.0 && exchange_interval.is_finite()) {
+            return Err(CouplingError::Invalid(format!("exchange interval {exchange_interval} s must be positive")));
+        }
+        let mut markers = wall_markers.to_vec();
+        let mut bodies = Vec::new();
+        for (k, (body, local)) in fsi_bodies.into_iter().enumerate() {
+            let s = rigid.state(body);
+            let start = markers.len();
+            markers.extend(local.iter().map(|l| MarkerInit { pos: s.to_world(*l), owner: k as u32 + 1 }));
+            bodies.push(FsiBody { body, local, markers: start..markers.len() });
+        }
+        let fluid = CpuSph::new(fluid_config, materials, particles, &markers, domain).map_err(CouplingError::Solver)?;
+        let n = bodies.len();
+        let mut sys = Self {
+            fluid,
+            rigid,
+            interface: FsiInterface { bodies, wrenches: vec![Wrench::default(); n] },
+            exchange_interval,
+            rigid_substep: exchange_interval.min(1e-3),
+            time: 0.0,
+        };
+        let states = sys.states_at(0.0);
+        sys.interface.place_markers(&mut sys.fluid, &states);
+        Ok(sys)
+    }
+
+    /// Simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// FSI body states extrapolated `tau` seconds past the rigid world's current state.
+    fn states_at(&self, tau: f64) -> Vec<BodyState> {
+        self.interface.bodies.iter().map(|b| extrapolate(&self.rigid.state(b.body), tau)).collect()
+    }
+
+    /// Mean soil wrench on FSI body `k` over the last interval.
+    pub fn wrench(&self, k: usize) -> Wrench {
+        self.interface.wrenches[k]
+    }
+
+    /// Advances one exchange interval (shorter if `max` is smaller, to land on an end time).
+    pub fn advance(&mut self, max: Option<f64>) -> Result<ExchangeReport, SolverError> {
+        let delta = max.map_or(self.exchange_interval, |m| m.min(self.exchange_interval));
+        let t0 = self.time;
+        let mut tau = 0.0;
+        let n = self.interface.bodies.len();
+        let mut sum = vec![Wrench::default(); n];
+        let mut report = ExchangeReport { dt_min: f64::INFINITY, ..Default::default() };
+        while tau < delta * (1.0 - 1e-12) {
+            // 1. Markers from the body states extrapolated to the substep's start.
+            let states = self.states_at(tau);
+            self.interface.place_markers(&mut self.fluid, &states);
+            // 2. One soil substep.
+            let r = self.fluid.step(Some(delta - tau))?;
+            // Forces of the substep's final stage, torques about the mid-substep centre of mass.
+            let mid = self.states_at(tau + 0.5 * r.dt);
+            for (acc, w) in sum.iter_mut().zip(self.interface.wrenches(&self.fluid, &mid)) {
+                acc.force = add(acc.force, scale(w.force, r.dt));
+                acc.torque = add(acc.torque, scale(w.torque, r.dt));
+            }
+            tau += r.dt;
+            report.fluid_steps += 1;
+            report.max_speed = r.max_speed;
+            report.pairs = r.pairs;
+            report.dt_min = report.dt_min.min(r.dt);
+            report.dt_max = report.dt_max.max(r.dt);
+        }
+        // 3. Mean over the interval.
+        for (w, acc) in self.interface.wrenches.iter_mut().zip(&sum) {
+            *w = Wrench { force: scale(acc.force, 1.0 / tau), torque: scale(acc.torque, 1.0 / tau) };
+        }
+        // 4. Rigid substeps with that wrench.
+        for (b, w) in self.interface.bodies.iter().zip(&self.interface.wrenches) {
+            if matches!(self.rigid.motion(b.body), Motion::Free) {
+                self.rigid.set_wrench(b.body, w.force, w.torque);
+            }
+        }
+        let substeps = (tau / self.rigid_substep).ceil().max(1.0) as u32;
+        for _ in 0..substeps {
+            self.rigid.step(tau / substeps as f64);
+        }
+        report.rigid_steps = substeps;
+        self.time = t0 + tau;
+        report.time = self.time;
+        Ok(report)
+    }
+}
