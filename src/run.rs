@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use regolith_fsi::Real;
 use regolith_fsi::cpu::CpuSph;
-use regolith_fsi::rheology::Rheology;
+use regolith_fsi::rheology::{Material, Rheology};
 use regolith_terrain::{RegionSpec, SoilRegion, TerrainBuild, build_terrain};
 use serde::Serialize;
 
@@ -45,21 +45,15 @@ pub struct SoilModel<T: Real> {
     pub terrain: TerrainBuild,
 }
 
-/// Builds the soil solver of a scene in precision `T`.
-pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, RunError> {
-    let mats64: Vec<_> = scene
-        .materials
-        .iter()
-        .map(|m| m.params.build::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| RunError::Build(e.to_string()))?;
-    let mats: Vec<_> = scene
-        .materials
-        .iter()
-        .map(|m| m.params.build::<T>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| RunError::Build(e.to_string()))?;
-    let container = scene.container.ok_or_else(|| RunError::Build("a terrain scene needs a [container]".into()))?;
+/// A scene's materials in precision `T` and its terrain (soil particles, wall markers,
+/// domain), as generated from its soil regions.
+pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, TerrainBuild), RunError> {
+    let build = |e: String| RunError::Build(e);
+    let mats64: Vec<Material<f64>> =
+        scene.materials.iter().map(|m| m.params.build()).collect::<Result<_, _>>().map_err(|e| build(e.to_string()))?;
+    let mats: Vec<Material<T>> =
+        scene.materials.iter().map(|m| m.params.build()).collect::<Result<_, _>>().map_err(|e| build(e.to_string()))?;
+    let container = scene.container.ok_or_else(|| build("a scene needs a [container]".into()))?;
     let regions: Vec<RegionSpec> =
         scene.soil.iter().map(|s| RegionSpec { region: s.region.clone(), material: s.material as u16 }).collect();
     let terrain = build_terrain(
@@ -70,7 +64,13 @@ pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, RunError> {
         &regions,
         &mats64,
     )
-    .map_err(|e| RunError::Build(e.to_string()))?;
+    .map_err(|e| build(e.to_string()))?;
+    Ok((mats, terrain))
+}
+
+/// Builds the soil solver of a terrain scene (bodies ignored) in precision `T`.
+pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, RunError> {
+    let (mats, terrain) = scene_terrain::<T>(scene)?;
     let solver = CpuSph::new(scene.solver, mats, &terrain.particles, &terrain.markers, terrain.domain)?;
     Ok(SoilModel { solver, terrain })
 }

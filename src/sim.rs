@@ -17,7 +17,7 @@ use std::path::Path;
 use regolith_coupling::{ExchangeReport, FsiSystem, SoilInit, Wrench, shape_markers};
 use regolith_fsi::Real;
 use regolith_rigid::{BodyId, BodyState, JointDesc, JointId, Motion, RigidWorld};
-use regolith_terrain::{RegionSpec, TerrainBuild, build_terrain};
+use regolith_terrain::TerrainBuild;
 
 use crate::run::RunError;
 use crate::scene::{Scene, load_scene};
@@ -48,31 +48,7 @@ impl<T: Real> Simulation<T> {
     /// Builds a validated scene.
     pub fn new(scene: &Scene) -> Result<Self, RunError> {
         let build = |e: String| RunError::Build(e);
-        let mats64: Vec<_> = scene
-            .materials
-            .iter()
-            .map(|m| m.params.build::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|e| build(e.to_string()))?;
-        let mats: Vec<_> = scene
-            .materials
-            .iter()
-            .map(|m| m.params.build::<T>())
-            .collect::<Result<_, _>>()
-            .map_err(|e| build(e.to_string()))?;
-        let container = scene.container.ok_or_else(|| build("a scene needs a [container]".into()))?;
-        let regions: Vec<RegionSpec> =
-            scene.soil.iter().map(|s| RegionSpec { region: s.region.clone(), material: s.material as u16 }).collect();
-        let terrain = build_terrain(
-            &container,
-            scene.solver.spacing,
-            scene.solver.bce_layers,
-            scene.solver.gravity,
-            &regions,
-            &mats64,
-        )
-        .map_err(|e| build(e.to_string()))?;
-
+        let (mats, terrain) = crate::run::scene_terrain::<T>(scene)?;
         // Soil cannot start inside a body: carve each FSI body (grown by half a spacing, the
         // distance at which its markers and the soil would overlap) out of the soil.
         let mut terrain = terrain;

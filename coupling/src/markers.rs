@@ -164,18 +164,9 @@ fn add_shape(set: &mut MarkerSet, shape: &ShapeDesc, at: &Pose, d0: f64, layers:
             let pts = cylinder_points(*radius, *width, d0, layers);
             add_points(set, pts, &at.compose(&z_onto(Axis::Y)));
             if let Some(g) = grousers {
-                for k in 0..g.count {
-                    let angle = 360.0 * k as f64 / g.count as f64;
-                    let rot = Pose::from_rpy_deg([0.0; 3], [0.0, angle, 0.0]);
-                    let centre = rot.rotate([0.0, 0.0, radius + 0.5 * g.height]);
+                for p in g.plate_poses(*radius) {
                     let plate = ShapeDesc::Box { size: [g.thickness.max(d0), *width, g.height] };
-                    add_shape(
-                        set,
-                        &plate,
-                        &at.compose(&Pose { translation: centre, rotation: rot.rotation }),
-                        d0,
-                        layers.min(2),
-                    )?;
+                    add_shape(set, &plate, &at.compose(&p), d0, layers.min(2))?;
                 }
             }
         }

@@ -107,6 +107,18 @@ pub struct Grousers {
     pub thickness: f64,
 }
 
+impl Grousers {
+    /// Pose (wheel frame, axle along y) of the centre of each plate on a rim of radius
+    /// `radius`: plates evenly spaced in angle, centred at `radius + height/2`, their local z
+    /// radial and local x along the tread.
+    pub fn plate_poses(&self, radius: f64) -> impl Iterator<Item = Pose> + '_ {
+        (0..self.count).map(move |k| {
+            let rot = Pose::from_rpy_deg([0.0; 3], [0.0, 360.0 * k as f64 / self.count as f64, 0.0]);
+            Pose { translation: rot.rotate([0.0, 0.0, radius + 0.5 * self.height]), rotation: rot.rotation }
+        })
+    }
+}
+
 /// A body shape in its body frame (origin at the shape's centre).
 #[derive(Clone, Debug, PartialEq)]
 pub enum ShapeDesc {
@@ -238,17 +250,9 @@ impl ShapeDesc {
             Self::Wheel { radius, width, grousers } => {
                 Self::Cylinder { radius: *radius, length: *width, axis: Axis::Y }.mark_inside(at, points, m, inside);
                 if let Some(g) = grousers {
-                    for k in 0..g.count {
-                        let angle = 360.0 * k as f64 / g.count as f64;
-                        let rot = Pose::from_rpy_deg([0.0; 3], [0.0, angle, 0.0]);
-                        let centre = rot.rotate([0.0, 0.0, radius + 0.5 * g.height]);
+                    for p in g.plate_poses(*radius) {
                         let plate = Self::Box { size: [g.thickness, *width, g.height] };
-                        plate.mark_inside(
-                            &at.compose(&Pose { translation: centre, rotation: rot.rotation }),
-                            points,
-                            m,
-                            inside,
-                        );
+                        plate.mark_inside(&at.compose(&p), points, m, inside);
                     }
                 }
                 return;

@@ -522,14 +522,9 @@ fn colliders(shape: &ShapeDesc, at: &Pose) -> Result<Vec<(Pose, ColliderBuilder)
             if let Some(g) = grousers {
                 positive(g.height, "grouser height")?;
                 positive(g.thickness, "grouser thickness")?;
-                for k in 0..g.count {
-                    let angle = 360.0 * k as f64 / g.count as f64;
-                    // A plate centred at radius R + h/2, extending radially, across the width.
-                    let rot = Pose::from_rpy_deg([0.0; 3], [0.0, angle, 0.0]);
-                    let centre = rot.rotate([0.0, 0.0, radius + 0.5 * g.height]);
-                    let p = at.compose(&Pose { translation: centre, rotation: rot.rotation });
+                for p in g.plate_poses(*radius) {
                     v.push((
-                        p,
+                        at.compose(&p),
                         ColliderBuilder::cuboid(
                             (0.5 * g.thickness) as Real,
                             (0.5 * width) as Real,

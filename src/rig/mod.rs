@@ -11,7 +11,6 @@ pub mod bekker;
 
 use regolith_fsi::Real;
 use regolith_rigid::{BodyDesc, JointDesc, JointKind, MassSpec, Motion, Pose, ShapeDesc, VelocityMotor};
-use regolith_terrain::{RegionSpec, build_terrain};
 use serde::Serialize;
 
 use crate::run::{RunError, Stepper};
@@ -23,18 +22,7 @@ use bekker::{BekkerFit, PlateCurve};
 /// Top of the soil (m) under a disc of radius `r` around `(x, y)`: the highest particle's
 /// centre, from the scene's initial terrain.
 pub fn soil_top(scene: &Scene, x: f64, y: f64, r: f64) -> Result<f64, RunError> {
-    let mats: Vec<_> = scene
-        .materials
-        .iter()
-        .map(|m| m.params.build::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| RunError::Build(e.to_string()))?;
-    let container = scene.container.ok_or_else(|| RunError::Build("a rig needs a [container]".into()))?;
-    let regions: Vec<RegionSpec> =
-        scene.soil.iter().map(|s| RegionSpec { region: s.region.clone(), material: s.material as u16 }).collect();
-    let t =
-        build_terrain(&container, scene.solver.spacing, scene.solver.bce_layers, scene.solver.gravity, &regions, &mats)
-            .map_err(|e| RunError::Build(e.to_string()))?;
+    let (_, t) = crate::run::scene_terrain::<f64>(scene)?;
     t.particles
         .iter()
         .filter(|p| (p.pos[0] - x).powi(2) + (p.pos[1] - y).powi(2) <= r * r)
