@@ -11,6 +11,7 @@ pub mod element;
 pub mod input;
 pub mod material;
 pub mod plot;
+pub mod record;
 pub mod rig;
 pub mod run;
 pub mod scene;

@@ -35,6 +35,23 @@ pub enum RunError {
         /// Why.
         message: String,
     },
+    /// Ctrl-C (SIGINT) stopped the run; the outputs up to that point were written.
+    #[error("interrupted (outputs up to t = {time:.4} s were written)")]
+    Interrupted {
+        /// Simulated time reached (s).
+        time: f64,
+    },
+}
+
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Asks running simulations to stop at the next exchange (what Ctrl-C does in the CLI).
+pub fn request_stop() {
+    INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst);
+}
+
+fn stop_requested() -> bool {
+    INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst)
 }
 
 /// A built terrain simulation.
@@ -75,11 +92,11 @@ pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, RunError> {
     Ok(SoilModel { solver, terrain })
 }
 
-/// Counts what the stepping loop did, for the summary and the progress line.
+/// Drives the stepping loop of a run: counts what it did (for the summary), records frames,
+/// shows the progress bar and stops on Ctrl-C.
 #[derive(Debug)]
 pub struct Stepper {
     start: Instant,
-    last_print: Instant,
     /// Soil steps taken.
     pub steps: u64,
     /// Soil particles × steps.
@@ -94,16 +111,27 @@ pub struct Stepper {
     pub dt_min: f64,
     /// Largest soil step (s).
     pub dt_max: f64,
-    quiet: bool,
     end_time: f64,
+    bar: Option<indicatif::ProgressBar>,
+    /// The recording, if the run writes one.
+    pub recorder: Option<crate::record::Recorder>,
 }
 
 impl Stepper {
-    /// A fresh counter for a run that ends at `end_time` (s).
+    /// A fresh counter for runs that end at `end_time` (s). The progress bar shows unless
+    /// `quiet` or stdout is not a terminal.
     pub fn new(quiet: bool, end_time: f64) -> Self {
+        use std::io::IsTerminal as _;
+        let bar = (!quiet && std::io::stdout().is_terminal()).then(|| {
+            let bar = indicatif::ProgressBar::new(1000);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{bar:30} {msg} ETA {eta}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            bar
+        });
         Self {
             start: Instant::now(),
-            last_print: Instant::now(),
             steps: 0,
             particle_steps: 0.0,
             pairs: 0.0,
@@ -111,13 +139,29 @@ impl Stepper {
             last_speed: 0.0,
             dt_min: f64::INFINITY,
             dt_max: 0.0,
-            quiet,
             end_time,
+            bar,
+            recorder: None,
+        }
+    }
+
+    /// Starts a run of a simulation (`label`: a rig run's slip or plate size): records its
+    /// shapes and first frame.
+    pub fn begin<T: Real>(&mut self, sim: &Simulation<T>, label: Option<f64>) -> Result<(), RunError> {
+        if let Some(b) = &self.bar {
+            b.reset_eta();
+        }
+        match self.recorder.as_mut() {
+            Some(r) => r.begin_run(sim, label),
+            None => Ok(()),
         }
     }
 
     /// Advances a simulation by one exchange interval (at most to the end time).
     pub fn step<T: Real>(&mut self, sim: &mut Simulation<T>) -> Result<(), RunError> {
+        if stop_requested() {
+            return Err(RunError::Interrupted { time: sim.time() });
+        }
         let remaining = self.end_time - sim.time();
         let r = sim.step_max(Some(remaining))?;
         let n = sim.system.fluid.active() as f64;
@@ -128,19 +172,36 @@ impl Stepper {
         self.dt_min = self.dt_min.min(r.dt_min);
         self.dt_max = self.dt_max.max(r.dt_max);
         self.max_speed_run = self.max_speed_run.max(r.max_speed);
-        if !self.quiet && self.last_print.elapsed().as_secs_f64() > 2.0 {
-            self.last_print = Instant::now();
-            let el = self.start.elapsed().as_secs_f64();
+        if let Some(rec) = self.recorder.as_mut() {
+            rec.after_step(sim)?;
+        }
+        if let Some(b) = &self.bar {
+            let el = self.start.elapsed().as_secs_f64().max(1e-9);
             let t = sim.time();
-            eprintln!(
-                "  t = {t:.4} / {} s, {} steps, {:.2e} particle-steps/s, real-time factor {:.2e}",
+            b.set_position((1000.0 * t / self.end_time).round() as u64);
+            b.set_message(format!(
+                "t = {t:.4}/{} s  RTF {:.2e}  {:.2e} particle-steps/s",
                 self.end_time,
-                self.steps,
-                self.particle_steps / el,
-                t / el
-            );
+                t / el,
+                self.particle_steps / el
+            ));
         }
         Ok(())
+    }
+
+    /// Records a rig's quantities with the frame the last step took, if it took one.
+    pub fn rig<T: Real>(&mut self, sim: &Simulation<T>, kind: &str, fields: &[(&str, f64)]) -> Result<(), RunError> {
+        match self.recorder.as_mut() {
+            Some(r) => r.rig(sim, kind, fields),
+            None => Ok(()),
+        }
+    }
+
+    /// Clears the progress bar.
+    pub fn finish_bar(&mut self) {
+        if let Some(b) = self.bar.take() {
+            b.finish_and_clear();
+        }
     }
 
     /// Wall-clock time since the counter started (s).
@@ -267,16 +328,31 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
     std::fs::create_dir_all(&opts.out)
         .map_err(|e| RunError::Output { path: opts.out.clone(), message: e.to_string() })?;
     let mut stepper = Stepper::new(opts.quiet, scene.end_time);
+    if scene.output.mcap {
+        stepper.recorder = Some(crate::record::Recorder::create(&opts.out.join("recording.mcap"), &scene.output)?);
+    }
     let mut outputs = Vec::new();
     let mut failure = None;
-    let (sim, series, rig, bekker, figures, initial) = if let Some(spec) = &scene.rig {
+    let mut interrupted = None;
+    // A solver error or Ctrl-C ends the run with its outputs written; other errors end it at once.
+    let mut stopped = |e: RunError| match e {
+        RunError::Solver(e) => {
+            failure = Some(e);
+            Ok(())
+        }
+        RunError::Interrupted { time } => {
+            interrupted = Some(time);
+            Ok(())
+        }
+        e => Err(e),
+    };
+    let (sim, series, rig, bekker, mut figures, initial) = if let Some(spec) = &scene.rig {
         match crate::rig::run_rig::<T>(scene, spec, &mut stepper) {
             Ok(out) => (out.last, Some(out.series), Some(out.report), out.bekker, out.figures, None),
-            Err(RunError::Solver(e)) => {
-                failure = Some(e);
+            Err(e) => {
+                stopped(e)?;
                 (None, None, None, None, Vec::new(), None)
             }
-            Err(e) => return Err(e),
         }
     } else {
         let mut sim = Simulation::<T>::new(scene)?;
@@ -285,6 +361,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
         if let Some(s) = series.as_mut() {
             s.push(&sim, None, &[]);
         }
+        stepper.begin(&sim, None)?;
         while sim.time() < scene.end_time * (1.0 - 1e-12) {
             match stepper.step(&mut sim) {
                 Ok(()) => {
@@ -292,15 +369,19 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
                         s.push(&sim, None, &[]);
                     }
                 }
-                Err(RunError::Solver(e)) => {
-                    failure = Some(e);
+                Err(e) => {
+                    stopped(e)?;
                     break;
                 }
-                Err(e) => return Err(e),
             }
         }
         (Some(sim), series, None, None, Vec::new(), Some(initial))
     };
+    stepper.finish_bar();
+    if let Some(mut r) = stepper.recorder.take() {
+        r.finish()?;
+        outputs.push(r.path().to_path_buf());
+    }
     let wall = stepper.elapsed();
     let fluid = sim.as_ref().map(|s| &s.system.fluid);
     let mut summary = Summary {
@@ -369,6 +450,9 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
         s.write(&p)?;
         outputs.push(p);
     }
+    if let (Some(s), Some(i)) = (&sim, &initial) {
+        figures.push(("deposit_profile".into(), deposit_profile(scene, i, &s.system.fluid, summary.runout.as_ref())));
+    }
     for (stem, fig) in &figures {
         let files = crate::plot::write_figure(fig, &opts.out, stem)
             .map_err(|e| RunError::Output { path: e.path.clone(), message: e.message })?;
@@ -378,9 +462,10 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
     outputs.push(summary_path.clone());
     summary.outputs = outputs.iter().map(|p| p.display().to_string()).collect();
     write_json(&summary_path, &summary)?;
-    match failure {
-        Some(e) => Err(RunError::Solver(e)),
-        None => Ok(summary),
+    match (failure, interrupted) {
+        (Some(e), _) => Err(RunError::Solver(e)),
+        (None, Some(time)) => Err(RunError::Interrupted { time }),
+        (None, None) => Ok(summary),
     }
 }
 
@@ -391,6 +476,41 @@ pub fn write_json<S: Serialize>(path: &Path, value: &S) -> Result<(), RunError> 
     std::fs::write(path, text).map_err(|e| RunError::Output { path: path.to_path_buf(), message: e.to_string() })
 }
 
+/// One particle's output values.
+#[derive(Clone, Copy, Debug)]
+pub struct ParticleRow {
+    /// Position (m).
+    pub pos: [f64; 3],
+    /// Velocity (m/s).
+    pub vel: [f64; 3],
+    /// Pressure p = −tr σ / 3 (Pa, compression positive).
+    pub p: f64,
+    /// Von Mises deviatoric stress q (Pa).
+    pub q: f64,
+    /// MCC preconsolidation pressure (Pa), 0 for other models.
+    pub pc: f64,
+    /// Material id.
+    pub material: u16,
+}
+
+/// The output values of active particle `i`.
+pub fn particle_row<T: Real>(s: &CpuSph<T>, i: usize) -> ParticleRow {
+    let sig = s.stresses()[i];
+    let material = s.material_ids()[i];
+    let pc = match s.materials()[material as usize].rheology {
+        Rheology::Mcc(_) => s.states()[i].pc.as_f64(),
+        _ => 0.0,
+    };
+    ParticleRow {
+        pos: s.positions()[i].as_f64(),
+        vel: s.velocities()[i].as_f64(),
+        p: sig.pressure().as_f64(),
+        q: sig.von_mises().as_f64(),
+        pc,
+        material,
+    }
+}
+
 /// `x,y,z,vx,vy,vz,p,q,pc,material` for every active particle.
 pub fn write_particles_csv<T: Real>(path: &Path, s: &CpuSph<T>) -> Result<(), RunError> {
     let io = |e: std::io::Error| RunError::Output { path: path.to_path_buf(), message: e.to_string() };
@@ -398,31 +518,52 @@ pub fn write_particles_csv<T: Real>(path: &Path, s: &CpuSph<T>) -> Result<(), Ru
     let mut w = std::io::BufWriter::new(f);
     writeln!(w, "x,y,z,vx,vy,vz,p,q,pc,material").map_err(io)?;
     for i in 0..s.active() {
-        let p = s.positions()[i].as_f64();
-        let v = s.velocities()[i].as_f64();
-        let sig = s.stresses()[i];
-        let mat = s.material_ids()[i];
-        let pc = match s.materials()[mat as usize].rheology {
-            Rheology::Mcc(_) => s.states()[i].pc.as_f64(),
-            _ => 0.0,
-        };
-        writeln!(
-            w,
-            "{},{},{},{},{},{},{},{},{},{}",
-            p[0],
-            p[1],
-            p[2],
-            v[0],
-            v[1],
-            v[2],
-            sig.pressure().as_f64(),
-            sig.von_mises().as_f64(),
-            pc,
-            mat
-        )
-        .map_err(io)?;
+        let r = particle_row(s, i);
+        let [x, y, z] = r.pos;
+        let [vx, vy, vz] = r.vel;
+        writeln!(w, "{x},{y},{z},{vx},{vy},{vz},{},{},{},{}", r.p, r.q, r.pc, r.material).map_err(io)?;
     }
     w.flush().map_err(io)
+}
+
+/// The deposit's surface profile, initial and final: the highest particle top in bins of the
+/// radial distance from the column axis (column collapse) or of x (other terrain).
+fn deposit_profile<T: Real>(
+    scene: &Scene,
+    initial: &[[f64; 3]],
+    s: &CpuSph<T>,
+    runout: Option<&Runout>,
+) -> crate::plot::Figure {
+    let d0 = scene.solver.spacing;
+    let coord = |p: [f64; 3]| match runout {
+        Some(r) => ((p[0] - r.axis[0]).powi(2) + (p[1] - r.axis[1]).powi(2)).sqrt(),
+        None => p[0],
+    };
+    let profile = |pts: &mut dyn Iterator<Item = [f64; 3]>| {
+        let mut bins: std::collections::BTreeMap<i64, f64> = std::collections::BTreeMap::new();
+        for p in pts {
+            let k = (coord(p) / d0).floor() as i64;
+            let top = p[2] + 0.5 * d0;
+            let e = bins.entry(k).or_insert(f64::NEG_INFINITY);
+            *e = e.max(top);
+        }
+        bins.into_iter().map(|(k, z)| ((k as f64 + 0.5) * d0, z)).collect::<Vec<_>>()
+    };
+    let fin = profile(&mut (0..s.active()).map(|i| s.positions()[i].as_f64()));
+    let ini = profile(&mut initial.iter().copied());
+    let x_label = if runout.is_some() { "distance from the column axis r (m)" } else { "x (m)" };
+    let floor = initial.iter().map(|p| p[2] - 0.5 * d0).fold(f64::INFINITY, f64::min);
+    let top = ini.iter().chain(&fin).map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+    crate::plot::Figure {
+        panels: vec![crate::plot::Panel {
+            title: "deposit surface".into(),
+            x_label: x_label.into(),
+            y_label: "surface height z (m)".into(),
+            series: vec![crate::plot::Series::line("initial", ini), crate::plot::Series::line("final", fin)],
+            y_range: (floor.is_finite() && top > floor).then(|| (floor, top + 0.1 * (top - floor))),
+            ..Default::default()
+        }],
+    }
 }
 
 /// The radius within which 99 % of the particles lie, about an axis, plus half a spacing

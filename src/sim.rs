@@ -16,7 +16,7 @@ use std::path::Path;
 
 use regolith_coupling::{ExchangeReport, FsiSystem, SoilInit, Wrench, shape_markers};
 use regolith_fsi::Real;
-use regolith_rigid::{BodyId, BodyState, JointDesc, JointId, Motion, RigidWorld};
+use regolith_rigid::{BodyId, BodyState, JointDesc, JointId, Motion, Pose, RigidWorld, ShapeDesc};
 use regolith_terrain::TerrainBuild;
 
 use crate::run::RunError;
@@ -181,6 +181,35 @@ impl<T: Real> Simulation<T> {
     /// Advances one exchange interval.
     pub fn step(&mut self) -> Result<ExchangeReport, RunError> {
         self.step_max(None)
+    }
+
+    /// Every named frame to record: each scene body's shape frame (its origin and orientation),
+    /// in world coordinates.
+    pub fn frames(&self) -> Vec<(String, Pose)> {
+        self.scene
+            .bodies
+            .iter()
+            .zip(&self.ids)
+            .map(|(b, id)| {
+                let st = self.system.rigid.state(*id);
+                (b.desc.name.clone(), Pose { translation: st.origin, rotation: st.rotation })
+            })
+            .collect()
+    }
+
+    /// The geometry drawn in each frame of [`Self::frames`].
+    pub fn frame_shapes(&self) -> Vec<(String, ShapeDesc)> {
+        self.scene.bodies.iter().map(|b| (b.desc.name.clone(), b.desc.shape.clone())).collect()
+    }
+
+    /// The soil wrench on every FSI body, by name.
+    pub fn fsi_wrenches(&self) -> Vec<(String, Wrench)> {
+        self.scene
+            .bodies
+            .iter()
+            .zip(&self.fsi)
+            .filter_map(|(b, k)| k.map(|k| (b.desc.name.clone(), self.system.wrench(k))))
+            .collect()
     }
 
     /// Effective soil surface height (m) over a disc of radius `r` around `(x, y)`: the top of

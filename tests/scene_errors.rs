@@ -110,7 +110,37 @@ case!(
     unknown_section,
     "[sph]",
     "[fluid]\nx = 1\n[sph]",
-    "{}:5: key `fluid`: unknown field `fluid`, expected one of `simulation`, `sph`, `materials`, `container`, `terrain`, `soil_blocks`, `bodies`, `rig` (unknown keys are errors so that nothing is silently ignored)"
+    "{}:5: key `fluid`: unknown field `fluid`, expected one of `simulation`, `sph`, `materials`, `container`, `terrain`, `soil_blocks`, `bodies`, `rig`, `output` (unknown keys are errors so that nothing is silently ignored)"
+);
+case!(
+    output_every_below_exchange,
+    "depth = 0.2\n",
+    "depth = 0.2\n\n[output]\nevery = 0.0001\n",
+    "{}:25: key `output.every`: must be at least simulation.exchange_interval = 0.001 s: frames are taken between exchanges (got 0.0001)"
+);
+case!(
+    output_decimate_zero,
+    "depth = 0.2\n",
+    "depth = 0.2\n\n[output]\ndecimate = 0\n",
+    "{}:25: key `output.decimate`: must be an integer ≥ 1: record every n-th particle (got 0)"
+);
+case!(
+    output_roi_half,
+    "depth = 0.2\n",
+    "depth = 0.2\n\n[output]\nroi_min = [0.0, 0.0, 0.0]\n",
+    "{}:24: key `output.roi_max`: is required with roi_min (the region of interest is a box)"
+);
+case!(
+    output_roi_inverted,
+    "depth = 0.2\n",
+    "depth = 0.2\n\n[output]\nroi_min = [0.0, 0.0, 0.0]\nroi_max = [0.1, -0.1, 0.1]\n",
+    "{}:26: key `output.roi_max`: must be finite and above roi_min on every axis (got [0.0, 0.0, 0.0] .. [0.1, -0.1, 0.1])"
+);
+case!(
+    output_unknown_key,
+    "depth = 0.2\n",
+    "depth = 0.2\n\n[output]\nrate = 10\n",
+    "{}:25: key `output.rate`: unknown field `rate`, expected one of `dir`, `every`, `mcap`, `particles`, `decimate`, `roi_min`, `roi_max` (unknown keys are errors so that nothing is silently ignored)"
 );
 case!(
     spacing_missing,

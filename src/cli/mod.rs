@@ -4,6 +4,7 @@
 mod bench;
 mod check;
 mod element;
+mod inspect;
 mod run;
 
 use std::path::PathBuf;
@@ -19,6 +20,8 @@ pub enum Failure {
     Input(InputError),
     /// The run itself failed: exit code 1.
     Run(anyhow::Error),
+    /// Ctrl-C stopped the run after writing its outputs: exit code 130.
+    Interrupted(String),
 }
 
 impl From<InputError> for Failure {
@@ -123,13 +126,14 @@ pub enum Command {
         #[arg(long, value_name = "DIR", default_value = "out/element")]
         out: PathBuf,
     },
-    /// Run a scene: write summary.json, particles_final.csv and plots to the output directory.
+    /// Run a scene: write summary.json, particles_final.csv, series.csv, recording.mcap and
+    /// plots to the output directory.
     Run {
         /// Scene file (TOML).
         scene: PathBuf,
-        /// Output directory.
-        #[arg(long, value_name = "DIR", default_value = "out/run")]
-        out: PathBuf,
+        /// Output directory [default: the scene's output.dir, else out/<scene name>].
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
         /// Backend, overriding the scene's.
         #[arg(long, value_enum)]
         backend: Option<BackendArg>,
@@ -142,9 +146,14 @@ pub enum Command {
         /// Slip ratios for a single-wheel rig, e.g. `--slips 0,0.2,0.4` (overrides rig.slips).
         #[arg(long, value_name = "S,S,...", value_delimiter = ',')]
         slips: Option<Vec<f64>>,
-        /// No progress output.
+        /// No scene description and no progress bar (the one-line summary still prints).
         #[arg(long)]
         quiet: bool,
+    },
+    /// Print the topics, message counts and time range of a recording (.mcap).
+    Inspect {
+        /// Recording file.
+        recording: PathBuf,
     },
     /// Time a fixed granular block collapse (particle-steps/s, neighbour interactions/s).
     Bench {
@@ -209,7 +218,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                     toml::Value::Array(s.into_iter().map(toml::Value::Float).collect()),
                 ));
             }
-            run::run(&scene, &out, backend, precision, &sets, quiet)
+            run::run(&scene, out.as_deref(), backend, precision, &sets, quiet)
         }
+        Command::Inspect { recording } => inspect::run(&recording),
     }
 }

@@ -9,7 +9,7 @@ use crate::scene::{self, Backend, load_scene};
 
 pub(super) fn run(
     path: &Path,
-    out: &Path,
+    out: Option<&Path>,
     backend: Option<BackendArg>,
     precision: Option<Precision>,
     sets: &[(String, toml::Value)],
@@ -43,13 +43,25 @@ pub(super) fn run(
     if !quiet {
         print!("{}", scene::describe(&scene));
     }
-    let opts = RunOptions { out: out.to_path_buf(), quiet };
-    let summary = run_scene(&scene, &opts).map_err(|e| {
-        Failure::Run(anyhow::Error::new(e).context(format!(
+    let out = match (out, &scene.output.dir) {
+        (Some(o), _) => o.to_path_buf(),
+        (None, Some(d)) => d.clone(),
+        (None, None) => {
+            Path::new("out").join(path.file_stem().map_or_else(|| "run".into(), |s| s.to_string_lossy().into_owned()))
+        }
+    };
+    // Ctrl-C stops the run at the next exchange; the outputs (and the recording) are finished.
+    // A second handler cannot be installed (e.g. the CLI called twice in one process): the run
+    // then simply has no graceful stop, which is not worth failing it for.
+    let _ = ctrlc::set_handler(crate::run::request_stop);
+    let opts = RunOptions { out: out.clone(), quiet };
+    let summary = run_scene(&scene, &opts).map_err(|e| match e {
+        crate::run::RunError::Interrupted { .. } => Failure::Interrupted(format!("{e}; outputs in {}", out.display())),
+        e => Failure::Run(anyhow::Error::new(e).context(format!(
             "run of {} failed (outputs written to {})",
             path.display(),
             out.display()
-        )))
+        ))),
     })?;
     for note in &summary.notes {
         println!("note: {note}");

@@ -153,6 +153,8 @@ fn plate<T: Real>(
         let offset = bottom_offset(&sc.bodies[body].desc.shape);
         let s = series.get_or_insert_with(|| Series::new(&sim, multi, &["sinkage", "pressure"]));
         s.push(&sim, multi.then_some(b), &[0.0, 0.0]);
+        stepper.begin(&sim, multi.then_some(b))?;
+        stepper.rig(&sim, "plate", &[("sinkage", 0.0), ("pressure", 0.0)])?;
         let mut curve = Vec::new();
         let (mut zmax, mut pmax) = (0.0_f64, 0.0_f64);
         while sim.time() < sc.end_time * (1.0 - 1e-12) {
@@ -161,6 +163,7 @@ fn plate<T: Real>(
             let sinkage = bottom0 - (st.origin[2] - offset);
             let p = sim.fsi_wrench(Body(body)).force[2] / area;
             s.push(&sim, multi.then_some(b), &[sinkage, p]);
+            stepper.rig(&sim, "plate", &[("sinkage", sinkage), ("pressure", p)])?;
             curve.push((sinkage, p));
             zmax = zmax.max(sinkage);
             pmax = pmax.max(p);
@@ -225,7 +228,11 @@ fn cone<T: Real>(
     let area = std::f64::consts::PI * radius * radius;
     let mut sim = Simulation::<T>::new(&sc)?;
     let mut series = Series::new(&sim, false, &["tip_depth", "base_depth", "cone_force", "cone_index"]);
-    series.push(&sim, None, &[-0.5 * sc.solver.spacing, -(height + 0.5 * sc.solver.spacing), 0.0, 0.0]);
+    let row0 = [-0.5 * sc.solver.spacing, -(height + 0.5 * sc.solver.spacing), 0.0, 0.0];
+    series.push(&sim, None, &row0);
+    let names = ["tip_depth", "base_depth", "cone_force", "cone_index"];
+    stepper.begin(&sim, None)?;
+    stepper.rig(&sim, "cone", &[(names[0], row0[0]), (names[1], row0[1]), (names[2], 0.0), (names[3], 0.0)])?;
     let mut curve = Vec::new();
     while sim.time() < sc.end_time * (1.0 - 1e-12) {
         stepper.step(&mut sim)?;
@@ -234,6 +241,12 @@ fn cone<T: Real>(
         let (tip_depth, base_depth) = (surface - tip, surface - (tip + height));
         let f = sim.fsi_wrench(Body(body)).force[2];
         series.push(&sim, None, &[tip_depth, base_depth, f, f / area]);
+        let vals = [tip_depth, base_depth, f, f / area];
+        stepper.rig(
+            &sim,
+            "cone",
+            &[(names[0], vals[0]), (names[1], vals[1]), (names[2], vals[2]), (names[3], vals[3])],
+        )?;
         curve.push((base_depth, f, f / area));
         if base_depth >= depth {
             break;
@@ -384,6 +397,12 @@ fn wheel<T: Real>(
         let label = slip.unwrap_or(f64::NAN);
         let s = series.get_or_insert_with(|| Series::new(&sim, multi, &["slip", "drawbar_pull", "torque", "sinkage"]));
         let mut rows: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
+        let names = ["slip", "drawbar_pull", "torque", "sinkage"];
+        let record = |stepper: &mut Stepper, sim: &Simulation<T>, v: [f64; 4]| {
+            stepper.rig(sim, "wheel", &[(names[0], v[0]), (names[1], v[1]), (names[2], v[2]), (names[3], v[3])])
+        };
+        stepper.begin(&sim, multi.then_some(label))?;
+        record(stepper, &sim, [1.0, 0.0, 0.0, 0.0])?;
         while sim.time() < sc.end_time * (1.0 - 1e-12) {
             stepper.step(&mut sim)?;
             let st = sim.body_state(Body(body));
@@ -391,6 +410,7 @@ fn wheel<T: Real>(
             let measured = 1.0 - st.linvel[0] / (omega * radius);
             let (dbp, torque, sinkage) = (w.force[0], -w.torque[1], centre[2] - st.origin[2]);
             s.push(&sim, multi.then_some(label), &[measured, dbp, torque, sinkage]);
+            record(stepper, &sim, [measured, dbp, torque, sinkage])?;
             rows.push((sim.time(), measured, dbp, torque, sinkage));
         }
         let half: Vec<_> = rows.iter().filter(|r| r.0 >= 0.5 * sc.end_time).collect();

@@ -18,6 +18,19 @@ pub(crate) struct SceneFile {
     #[serde(default)]
     pub bodies: Vec<BodyFile>,
     pub rig: Option<RigFile>,
+    pub output: Option<OutputFile>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct OutputFile {
+    pub dir: Option<String>,
+    pub every: Option<f64>,
+    pub mcap: Option<bool>,
+    pub particles: Option<bool>,
+    pub decimate: Option<i64>,
+    pub roi_min: Option<[f64; 3]>,
+    pub roi_max: Option<[f64; 3]>,
 }
 
 #[derive(Debug, Default, Deserialize)]

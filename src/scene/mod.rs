@@ -52,7 +52,7 @@ use crate::input::{InputError, parse_toml, read_text};
 use crate::material::{build_material, load_material_file};
 use file::{
     AxisName, BackendName, BlockShapeName, BodyFile, FreeSurfaceStressName, IntegratorName, KernelName, MotionFile,
-    PrecisionName, RigFile, RigKind, ScaleFile, SceneFile, ShapeFile, ShiftingName,
+    OutputFile, PrecisionName, RigFile, RigKind, ScaleFile, SceneFile, ShapeFile, ShiftingName,
 };
 use regolith_rigid::{Axis, BodyDesc, Grousers, MassSpec, Motion, Pose, ShapeDesc};
 
@@ -210,6 +210,26 @@ pub struct Scene {
     pub rig: Option<RigSpec>,
     /// Soil–body exchange interval (s).
     pub exchange_interval: f64,
+    /// What the run records.
+    pub output: OutputSpec,
+}
+
+/// The `[output]` section: where the run writes and what `recording.mcap` holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputSpec {
+    /// Output directory (relative to the working directory); `--out` overrides it.
+    pub dir: Option<PathBuf>,
+    /// Recording interval in simulated seconds: a frame at t = 0, every, 2·every, … (each taken
+    /// at the first exchange at or after its time).
+    pub every: f64,
+    /// Whether `recording.mcap` is written at all.
+    pub mcap: bool,
+    /// Whether frames carry the soil point cloud.
+    pub particles: bool,
+    /// Keep the particles whose id is a multiple of this (a fixed subset, so it does not flicker).
+    pub decimate: usize,
+    /// Only particles inside this box (min, max) are recorded.
+    pub roi: Option<([f64; 3], [f64; 3])>,
 }
 
 fn key_err(path: &Path, source: &str, key: impl Into<String>, message: impl Into<String>) -> InputError {
@@ -605,6 +625,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         None => None,
         Some(r) => Some(resolve_rig(path, source, r, &bodies, &file.bodies)?),
     };
+    let output = resolve_output(file.output.unwrap_or_default(), end_time, exchange_interval, &e)?;
     Ok(Scene {
         path: path.to_path_buf(),
         end_time,
@@ -617,7 +638,66 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         bodies,
         rig,
         exchange_interval,
+        output,
     })
+}
+
+fn resolve_output(
+    o: OutputFile,
+    end_time: f64,
+    exchange: f64,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<OutputSpec, InputError> {
+    let dir = match o.dir {
+        Some(d) if d.trim().is_empty() => return Err(e("output.dir", "must not be empty".into())),
+        d => d.map(PathBuf::from),
+    };
+    // 100 frames by default, never closer than one exchange interval.
+    let every = o.every.unwrap_or((end_time / 100.0).max(exchange));
+    if !(every.is_finite() && every > 0.0) {
+        return Err(e("output.every", format!("must be > 0 s (got {every})")));
+    }
+    if every < exchange * (1.0 - 1e-9) {
+        return Err(e(
+            "output.every",
+            format!(
+                "must be at least simulation.exchange_interval = {exchange} s: frames are taken between exchanges (got {every})"
+            ),
+        ));
+    }
+    let decimate = o.decimate.unwrap_or(1);
+    if decimate < 1 {
+        return Err(e(
+            "output.decimate",
+            format!("must be an integer ≥ 1: record every n-th particle (got {decimate})"),
+        ));
+    }
+    let roi = match (o.roi_min, o.roi_max) {
+        (None, None) => None,
+        (Some(lo), Some(hi)) => {
+            if lo.iter().chain(&hi).any(|v| !v.is_finite()) || (0..3).any(|k| lo[k] >= hi[k]) {
+                return Err(e(
+                    "output.roi_max",
+                    format!("must be finite and above roi_min on every axis (got {lo:?} .. {hi:?})"),
+                ));
+            }
+            Some((lo, hi))
+        }
+        (Some(_), None) => {
+            return Err(e("output.roi_max", "is required with roi_min (the region of interest is a box)".into()));
+        }
+        (None, Some(_)) => {
+            return Err(e("output.roi_min", "is required with roi_max (the region of interest is a box)".into()));
+        }
+    };
+    let mcap = o.mcap.unwrap_or(true);
+    if !mcap && (o.particles.is_some() || o.decimate.is_some() || roi.is_some()) {
+        return Err(e(
+            "output.mcap",
+            "is false but particles, decimate or roi are set; they configure the recording".into(),
+        ));
+    }
+    Ok(OutputSpec { dir, every, mcap, particles: o.particles.unwrap_or(true), decimate: decimate as usize, roi })
 }
 
 fn resolve_body(

@@ -175,6 +175,20 @@ pub fn describe(scene: &Scene) -> String {
         let _ =
             writeln!(s, "  coupling: soil and bodies exchange state and wrenches every {} s", scene.exchange_interval);
     }
+    let o = &scene.output;
+    if o.mcap {
+        let pts = if !o.particles {
+            "no particles".to_string()
+        } else {
+            let roi = o.roi.map_or(String::new(), |(lo, hi)| format!(" inside {lo:?}..{hi:?}"));
+            format!("every {} particle(s){roi}", o.decimate)
+        };
+        let frames = (scene.end_time / o.every + 1e-9).floor() + 1.0;
+        let _ =
+            writeln!(s, "  recording: recording.mcap, a frame every {} s, {frames} frames per run ({pts})", o.every);
+    } else {
+        let _ = writeln!(s, "  recording: off (output.mcap = false)");
+    }
     let dt_est = match sv.time_step {
         TimeStep::Fixed(dt) => dt,
         TimeStep::Adaptive { cfl, max } => (cfl * min_dt).min(max),
