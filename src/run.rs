@@ -197,6 +197,19 @@ impl Stepper {
         }
     }
 
+    /// Records every vehicle's pose, speed and wheel states on `/vehicles/<name>` with the
+    /// frame the last step took, if it took one.
+    pub fn vehicles<T: Real>(&mut self, sim: &Simulation<T>) -> Result<(), RunError> {
+        let Some(r) = self.recorder.as_mut() else { return Ok(()) };
+        for (vi, v) in sim.scene.vehicles.iter().enumerate() {
+            let names = crate::series::vehicle_columns(v);
+            let values = crate::series::vehicle_values(sim, vi);
+            let fields: Vec<(&str, f64)> = names.iter().map(String::as_str).zip(values).collect();
+            r.values(sim, &format!("/vehicles/{}", v.name), "regolith.Vehicle", &fields)?;
+        }
+        Ok(())
+    }
+
     /// Clears the progress bar.
     pub fn finish_bar(&mut self) {
         if let Some(b) = self.bar.take() {
@@ -362,12 +375,14 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
             s.push(&sim, None, &[]);
         }
         stepper.begin(&sim, None)?;
+        stepper.vehicles(&sim)?;
         while sim.time() < scene.end_time * (1.0 - 1e-12) {
             match stepper.step(&mut sim) {
                 Ok(()) => {
                     if let Some(s) = series.as_mut() {
                         s.push(&sim, None, &[]);
                     }
+                    stepper.vehicles(&sim)?;
                 }
                 Err(e) => {
                     stopped(e)?;
@@ -450,6 +465,11 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
         s.write(&p)?;
         outputs.push(p);
     }
+    if let (Some(ser), None) = (&series, &scene.rig) {
+        for v in &scene.vehicles {
+            figures.push((format!("vehicle_{}", v.name), vehicle_figure(ser, v)));
+        }
+    }
     if let (Some(s), Some(i)) = (&sim, &initial) {
         figures.push(("deposit_profile".into(), deposit_profile(scene, i, &s.system.fluid, summary.runout.as_ref())));
     }
@@ -526,6 +546,65 @@ pub fn write_particles_csv<T: Real>(path: &Path, s: &CpuSph<T>) -> Result<(), Ru
     w.flush().map_err(io)
 }
 
+/// A vehicle's path, speed, and each wheel's slip and sinkage against time, from the series.
+fn vehicle_figure(s: &Series, v: &crate::scene::VehicleSpec) -> crate::plot::Figure {
+    use crate::plot::{Panel, Series as Line};
+    let col = |name: String| s.column(&name).map(|c| s.rows.iter().map(|r| r[c]).collect::<Vec<f64>>());
+    let t = col("time".into()).unwrap_or_default();
+    let pair = |a: &[f64], b: &[f64], scale: f64| -> Vec<(f64, f64)> {
+        a.iter().zip(b).filter(|(_, y)| y.is_finite()).map(|(x, y)| (*x, y * scale)).collect()
+    };
+    let x = col(format!("{}.x", v.name)).unwrap_or_default();
+    let y = col(format!("{}.y", v.name)).unwrap_or_default();
+    let speed = col(format!("{}.speed", v.name)).unwrap_or_default();
+    let mut slip =
+        Panel { title: "wheel slip".into(), x_label: "time (s)".into(), y_label: "slip".into(), ..Default::default() };
+    let mut sink = Panel {
+        title: "wheel sinkage".into(),
+        x_label: "time (s)".into(),
+        y_label: "sinkage (mm)".into(),
+        ..Default::default()
+    };
+    for w in &v.wheels {
+        let name = &v.model.links[w.link].name;
+        if let (Some(c), Some(om)) = (col(format!("{}/{name}.slip", v.name)), col(format!("{}/{name}.omega", v.name))) {
+            // Slip is undefined while a wheel barely turns: plot it where the wheel spins at
+            // 0.3 rad/s or more.
+            let pts = t
+                .iter()
+                .zip(&c)
+                .zip(&om)
+                .filter(|((_, s), w)| s.is_finite() && w.abs() >= 0.3)
+                .map(|((t, s), _)| (*t, *s))
+                .collect();
+            slip.series.push(Line::line(name.clone(), pts));
+        }
+        if let Some(c) = col(format!("{}/{name}.sinkage", v.name)) {
+            sink.series.push(Line::line(name.clone(), pair(&t, &c, 1e3)));
+        }
+    }
+    crate::plot::Figure {
+        panels: vec![
+            Panel {
+                title: format!("{} path", v.name),
+                x_label: "x (m)".into(),
+                y_label: "y (m)".into(),
+                series: vec![Line::line("root link", pair(&x, &y, 1.0))],
+                ..Default::default()
+            },
+            Panel {
+                title: "speed".into(),
+                x_label: "time (s)".into(),
+                y_label: "horizontal speed (m/s)".into(),
+                series: vec![Line::line("speed", pair(&t, &speed, 1.0))],
+                ..Default::default()
+            },
+            slip,
+            sink,
+        ],
+    }
+}
+
 /// The deposit's surface profile, initial and final: the highest particle top in bins of the
 /// radial distance from the column axis (column collapse) or of x (other terrain).
 fn deposit_profile<T: Real>(
@@ -560,7 +639,7 @@ fn deposit_profile<T: Real>(
             x_label: x_label.into(),
             y_label: "surface height z (m)".into(),
             series: vec![crate::plot::Series::line("initial", ini), crate::plot::Series::line("final", fin)],
-            y_range: (floor.is_finite() && top > floor).then(|| (floor, top + 0.1 * (top - floor))),
+            y_range: (floor.is_finite() && top > floor).then_some((floor, top + 0.1 * (top - floor))),
             ..Default::default()
         }],
     }

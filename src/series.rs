@@ -1,7 +1,9 @@
 //! `series.csv`: one row per sample, `time` first, then an optional `run` label (a rig's slip
 //! or plate size), then for every body `<name>.fx,.fy,.fz,.tx,.ty,.tz,.x,.y,.z,.vx,.vy,.vz`
 //! (soil force and torque about the centre of mass in N and N m, centre-of-mass position and
-//! velocity, world frame), then the rig's own columns.
+//! velocity, world frame), then per vehicle `<name>.x,.y,.z,.roll,.pitch,.yaw,.speed` (root link
+//! pose, roll–pitch–yaw in degrees, horizontal speed in m/s) and per wheel
+//! `<vehicle>/<link>.slip,.sinkage,.omega`, then the rig's own columns.
 
 use std::io::Write as _;
 use std::path::Path;
@@ -20,6 +22,43 @@ pub struct Series {
     pub rows: Vec<Vec<f64>>,
 }
 
+/// Per-vehicle column suffixes.
+pub const VEHICLE_COLUMNS: [&str; 7] = ["x", "y", "z", "roll", "pitch", "yaw", "speed"];
+
+/// Roll, pitch, yaw (deg; z-y-x convention, as URDF's rpy) of a unit quaternion `[x, y, z, w]`.
+pub fn roll_pitch_yaw_deg(q: [f64; 4]) -> [f64; 3] {
+    let [x, y, z, w] = q;
+    let roll = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
+    let pitch = (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin();
+    let yaw = (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z));
+    [roll, pitch, yaw].map(f64::to_degrees)
+}
+
+/// A vehicle's quantities: `x, y, z, roll, pitch, yaw, speed` of the root link, then
+/// `<wheel link>.slip, .sinkage, .omega` per wheel.
+pub fn vehicle_columns(v: &crate::scene::VehicleSpec) -> Vec<String> {
+    let mut c: Vec<String> = VEHICLE_COLUMNS.iter().map(|s| s.to_string()).collect();
+    for w in &v.wheels {
+        for q in ["slip", "sinkage", "omega"] {
+            c.push(format!("{}.{q}", v.model.links[w.link].name));
+        }
+    }
+    c
+}
+
+/// The values of [`vehicle_columns`] for vehicle `vi` now.
+pub fn vehicle_values<T: Real>(sim: &Simulation<T>, vi: usize) -> Vec<f64> {
+    let v = &sim.scene.vehicles[vi];
+    let st = sim.body_state(Body(v.body(v.model.root)));
+    let mut row = st.origin.to_vec();
+    row.extend(roll_pitch_yaw_deg(st.rotation));
+    row.push(st.linvel[0].hypot(st.linvel[1]));
+    for w in sim.wheel_states(vi) {
+        row.extend([w.slip, w.sinkage, w.omega]);
+    }
+    row
+}
+
 /// Per-body column suffixes.
 pub const BODY_COLUMNS: [&str; 12] = ["fx", "fy", "fz", "tx", "ty", "tz", "x", "y", "z", "vx", "vy", "vz"];
 
@@ -34,6 +73,12 @@ impl Series {
             for c in BODY_COLUMNS {
                 columns.push(format!("{}.{c}", b.desc.name));
             }
+        }
+        for v in &sim.scene.vehicles {
+            columns.extend(vehicle_columns(v).into_iter().map(|c| {
+                // `x` → `rover.x`, `wheel_fl.slip` → `rover/wheel_fl.slip`.
+                if c.contains('.') { format!("{}/{c}", v.name) } else { format!("{}.{c}", v.name) }
+            }));
         }
         columns.extend(extra.iter().map(|s| s.to_string()));
         Self { columns, rows: Vec::new() }
@@ -52,6 +97,9 @@ impl Series {
             row.extend(w.torque);
             row.extend(s.com);
             row.extend(s.linvel);
+        }
+        for vi in 0..sim.scene.vehicles.len() {
+            row.extend(vehicle_values(sim, vi));
         }
         row.extend_from_slice(extra);
         self.rows.push(row);

@@ -4,7 +4,6 @@
 
 mod common;
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use base64::Engine as _;
@@ -21,31 +20,6 @@ fn bed(sim: &str, output: &str, extra: &str) -> String {
 }
 
 const BOX: &str = "[[bodies]]\nname = \"box\"\nshape = { type = \"box\", size = [0.04, 0.04, 0.02] }\nmass = 0.5\nposition = [0.06, 0.06, 0.08]\n";
-
-/// Messages of a recording, by topic: (log time s, JSON value), each validated against the
-/// JSON schema its channel carries in the file.
-fn read_validated(path: &Path) -> BTreeMap<String, Vec<(f64, serde_json::Value)>> {
-    let bytes = std::fs::read(path).expect("recording exists");
-    assert!(mcap::Summary::read(&bytes).expect("summary parses").is_some(), "the summary section is written");
-    let mut validators: BTreeMap<u16, jsonschema::Validator> = BTreeMap::new();
-    let mut out: BTreeMap<String, Vec<(f64, serde_json::Value)>> = BTreeMap::new();
-    for m in mcap::MessageStream::new(&bytes).expect("stream") {
-        let m = m.expect("message parses");
-        assert_eq!(m.channel.message_encoding, "json");
-        let schema = m.channel.schema.as_ref().expect("every channel has a schema");
-        assert_eq!(schema.encoding, "jsonschema");
-        let v = validators.entry(m.channel.id).or_insert_with(|| {
-            let s: serde_json::Value = serde_json::from_slice(&schema.data).expect("schema is JSON");
-            jsonschema::validator_for(&s).expect("schema compiles")
-        });
-        let msg: serde_json::Value = serde_json::from_slice(&m.data).expect("message is JSON");
-        if let Err(e) = v.validate(&msg) {
-            panic!("{} message at {} ns does not match {}: {e}", m.channel.topic, m.log_time, schema.name);
-        }
-        out.entry(m.channel.topic.clone()).or_default().push((m.log_time as f64 * 1e-9, msg));
-    }
-    out
-}
 
 /// Decoded point-cloud points: (x, y, z, p, q, pc, speed, material).
 fn points(msg: &serde_json::Value) -> Vec<([f32; 7], u32)> {
@@ -70,7 +44,7 @@ fn a_recording_validates_and_follows_the_output_section() {
     let scene = common::scene(&bed("end_time = 0.04", "every = 0.005\ndecimate = 3", BOX));
     let out = common::out_dir("recording_terrain");
     let summary = run_scene(&scene, &RunOptions { out: out.clone(), quiet: true }).expect("runs");
-    let topics = read_validated(&out.join("recording.mcap"));
+    let topics = common::read_validated(&out.join("recording.mcap"));
     let count = |t: &str| topics.get(t).map_or(0, |v| v.len());
     assert_eq!(count("/terrain/particles"), 9);
     assert_eq!(count("/tf"), 9);
@@ -114,7 +88,7 @@ fn the_region_of_interest_keeps_only_the_points_inside_it() {
     let scene = common::scene(&bed("end_time = 0.01", roi, ""));
     let out = common::out_dir("recording_roi");
     let summary = run_scene(&scene, &RunOptions { out: out.clone(), quiet: true }).expect("runs");
-    let topics = read_validated(&out.join("recording.mcap"));
+    let topics = common::read_validated(&out.join("recording.mcap"));
     assert_eq!(topics["/terrain/particles"].len(), 2);
     assert!(!topics.contains_key("/tf"), "no bodies, no frames");
     let first = points(&topics["/terrain/particles"][0].1);
@@ -131,7 +105,7 @@ fn a_run_that_fails_midway_leaves_a_readable_recording() {
     let out = common::out_dir("recording_failure");
     let err = run_scene(&scene, &RunOptions { out: out.clone(), quiet: true }).expect_err("must fail");
     assert!(matches!(err, RunError::Solver(_)), "{err}");
-    let topics = read_validated(&out.join("recording.mcap"));
+    let topics = common::read_validated(&out.join("recording.mcap"));
     let frames = topics["/terrain/particles"].len();
     assert!(frames >= 2, "frames before the failure: {frames}");
     assert_eq!(topics["/tf"].len(), frames);
@@ -186,7 +160,7 @@ fn every_rig_and_the_terrain_run_draw_their_plots() {
             }
         }
         if !rig_topic.is_empty() {
-            let topics = read_validated(&out.join("recording.mcap"));
+            let topics = common::read_validated(&out.join("recording.mcap"));
             let rig = &topics[rig_topic];
             assert_eq!(rig.len(), topics["/terrain/particles"].len(), "{name}: one rig message per frame");
             assert!(!topics["/bodies/shapes"].is_empty());

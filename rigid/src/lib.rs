@@ -12,10 +12,11 @@ mod mesh_io;
 mod shape;
 mod world;
 
+pub mod dae;
 pub use mesh_io::{MeshError, TriangleMesh, load_mesh};
 pub use shape::{Axis, Grousers, Pose, ShapeDesc, quat_mul, quat_rotate};
 pub use world::{
-    BodyDesc, BodyId, BodyState, JointDesc, JointId, JointKind, MassSpec, Motion, RigidWorld, VelocityMotor,
+    BodyDesc, BodyId, BodyState, JointDesc, JointId, JointKind, MOTOR_GAIN, MassSpec, Motion, RigidWorld, VelocityMotor,
 };
 
 /// Errors of the rigid world.

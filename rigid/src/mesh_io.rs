@@ -1,5 +1,5 @@
-//! Triangle meshes from files: STL (ASCII or binary) and Wavefront OBJ (`v` and `f` records;
-//! polygons are fanned into triangles). Errors name the file and, for text formats, the line.
+//! Triangle meshes from files: STL (ASCII or binary), Wavefront OBJ (`v` and `f` records;
+//! polygons are fanned into triangles) and COLLADA `.dae` (see [`crate::dae`]). Errors name the file and, for text formats, the line.
 
 use std::path::{Path, PathBuf};
 
@@ -24,18 +24,19 @@ pub struct TriangleMesh {
     pub indices: Vec<[u32; 3]>,
 }
 
-fn err(path: &Path, line: Option<usize>, message: impl Into<String>) -> MeshError {
+pub(crate) fn err(path: &Path, line: Option<usize>, message: impl Into<String>) -> MeshError {
     MeshError { path: path.to_path_buf(), line, message: message.into() }
 }
 
-/// Loads `.stl` or `.obj`, scaling every coordinate by `scale` (per axis).
+/// Loads `.stl`, `.obj` or `.dae`, scaling every coordinate by `scale` (per axis).
 pub fn load_mesh(path: &Path, scale: [f64; 3]) -> Result<TriangleMesh, MeshError> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let bytes = std::fs::read(path).map_err(|e| err(path, None, format!("cannot read: {e}")))?;
     let mut mesh = match ext.as_deref() {
         Some("stl") => stl(path, &bytes)?,
         Some("obj") => obj(path, &bytes)?,
-        _ => return Err(err(path, None, "unsupported mesh format: use .stl or .obj")),
+        Some("dae") => crate::dae::read(path, &bytes)?,
+        _ => return Err(err(path, None, "unsupported mesh format: use .stl, .obj or .dae")),
     };
     if mesh.indices.is_empty() {
         return Err(err(path, None, "the mesh has no triangles"));

@@ -219,6 +219,43 @@ impl ShapeDesc {
                 .fold(0.0, f64::max),
         }
     }
+
+    /// Lowest world z of the shape at `pose` (m); `+∞` for an empty compound.
+    pub fn lowest_z(&self, pose: &Pose) -> f64 {
+        let z = pose.translation[2];
+        // World z component of a body-frame direction.
+        let up = |v: [f64; 3]| pose.rotate(v)[2];
+        // A disc of radius r about a body axis reaches down r·sqrt(1 − a_z²).
+        let disc = |axis: [f64; 3], r: f64| {
+            let a = up(axis);
+            r * (1.0 - a * a).max(0.0).sqrt()
+        };
+        match self {
+            Self::Box { size } => {
+                z - 0.5
+                    * (size[0] * up([1.0, 0.0, 0.0]).abs()
+                        + size[1] * up([0.0, 1.0, 0.0]).abs()
+                        + size[2] * up([0.0, 0.0, 1.0]).abs())
+            }
+            Self::Sphere { radius } => z - radius,
+            Self::Cylinder { radius, length, axis } => {
+                z - 0.5 * length * up(axis.unit()).abs() - disc(axis.unit(), *radius)
+            }
+            Self::Cone { radius, height } => {
+                let a = up([0.0, 0.0, 1.0]);
+                // Apex at −h/2 along the axis, base disc at +h/2.
+                (z - 0.5 * height * a).min(z + 0.5 * height * a - disc([0.0, 0.0, 1.0], *radius))
+            }
+            Self::Mesh { vertices, .. } => vertices.iter().map(|v| pose.apply(*v)[2]).fold(f64::INFINITY, f64::min),
+            Self::Wheel { radius, width, grousers } => {
+                let r = radius + grousers.map_or(0.0, |g| g.height);
+                z - 0.5 * width * up([0.0, 1.0, 0.0]).abs() - disc([0.0, 1.0, 0.0], r)
+            }
+            Self::Compound(parts) => {
+                parts.iter().map(|(p, s)| s.lowest_z(&pose.compose(p))).fold(f64::INFINITY, f64::min)
+            }
+        }
+    }
 }
 
 impl ShapeDesc {

@@ -12,6 +12,26 @@ pub enum MassSpec {
     Mass(f64),
     /// Uniform density (kg/m³).
     Density(f64),
+    /// Given mass properties (a URDF `<inertial>`): the colliders carry no mass.
+    Inertial {
+        /// Mass (kg).
+        mass: f64,
+        /// Centre of mass in the body frame (m).
+        com: [f64; 3],
+        /// Inertia tensor about the centre of mass, body-frame axes:
+        /// `[ixx, iyy, izz, ixy, ixz, iyz]` (kg m²).
+        inertia: [f64; 6],
+    },
+}
+
+impl MassSpec {
+    /// Mass (kg) of a body of this spec and shape.
+    pub fn mass_of(&self, shape: &ShapeDesc) -> f64 {
+        match *self {
+            Self::Mass(m) | Self::Inertial { mass: m, .. } => m,
+            Self::Density(d) => d * shape.volume(),
+        }
+    }
 }
 
 /// How a body moves.
@@ -68,6 +88,8 @@ pub enum JointKind {
     Revolute,
     /// Translation along one axis.
     Prismatic,
+    /// No relative motion (the axis is ignored).
+    Fixed,
 }
 
 /// A joint between two bodies, given in the world frame at creation.
@@ -247,17 +269,48 @@ impl RigidWorld {
         };
         let body = builder.pose(pose(&desc.pose)).can_sleep(false).ccd_enabled(false).build();
         let handle = self.world.bodies.insert(body);
-        let total_volume = desc.shape.volume();
-        if !(total_volume > 0.0 && total_volume.is_finite()) {
-            return Err(RigidError::Invalid(format!("body \"{}\": shape has no volume", desc.name)));
-        }
         let density = match desc.mass {
-            MassSpec::Density(d) => d,
-            MassSpec::Mass(m) => m / total_volume,
+            MassSpec::Inertial { mass, com, inertia } => {
+                let [ixx, iyy, izz, ixy, ixz, iyz] = inertia;
+                let positive = mass > 0.0 && mass.is_finite() && [ixx, iyy, izz].iter().all(|i| *i > 0.0);
+                // The principal moments of a physical body obey the triangle inequality.
+                let triangle = ixx + iyy >= izz && iyy + izz >= ixx && ixx + izz >= iyy;
+                if !positive || !triangle || inertia.iter().chain(&com).any(|v| !v.is_finite()) {
+                    return Err(RigidError::Invalid(format!(
+                        "body \"{}\": inertial needs mass > 0 and a physical inertia (ixx, iyy, izz > 0, triangle inequality); got mass {mass}, inertia {inertia:?}",
+                        desc.name
+                    )));
+                }
+                let m = Matrix::from_cols_array(&[
+                    ixx as Real,
+                    ixy as Real,
+                    ixz as Real,
+                    ixy as Real,
+                    iyy as Real,
+                    iyz as Real,
+                    ixz as Real,
+                    iyz as Real,
+                    izz as Real,
+                ]);
+                let props = MassProperties::with_inertia_matrix(v3(com), mass as Real, m);
+                self.world.bodies[handle].set_additional_mass_properties(props, true);
+                0.0
+            }
+            MassSpec::Density(d) | MassSpec::Mass(d) => {
+                let total_volume = desc.shape.volume();
+                if !(total_volume > 0.0 && total_volume.is_finite()) {
+                    return Err(RigidError::Invalid(format!("body \"{}\": shape has no volume", desc.name)));
+                }
+                let density = if matches!(desc.mass, MassSpec::Density(_)) { d } else { d / total_volume };
+                if !(density > 0.0 && density.is_finite()) {
+                    return Err(RigidError::Invalid(format!(
+                        "body \"{}\": mass and density must be positive",
+                        desc.name
+                    )));
+                }
+                density
+            }
         };
-        if !(density > 0.0 && density.is_finite()) {
-            return Err(RigidError::Invalid(format!("body \"{}\": mass and density must be positive", desc.name)));
-        }
         for (p, collider) in colliders(&desc.shape, &Pose::default())? {
             let mut c = collider.position(pose(&p)).density(density as Real).friction(desc.friction as Real);
             if !desc.collides {
@@ -317,12 +370,18 @@ impl RigidWorld {
         let (mask, motor_axis) = match j.kind {
             JointKind::Revolute => (JointAxesMask::LOCKED_REVOLUTE_AXES, JointAxis::AngX),
             JointKind::Prismatic => (JointAxesMask::LOCKED_PRISMATIC_AXES, JointAxis::LinX),
+            JointKind::Fixed => (JointAxesMask::LOCKED_FIXED_AXES, JointAxis::AngX),
         };
+        if j.kind == JointKind::Fixed && j.motor.is_some() {
+            return Err(RigidError::Invalid(format!("joint \"{}\": a fixed joint has no motor", j.name)));
+        }
+        // One world frame at the anchor with its x along the axis, seen from both bodies: the
+        // locked axes then hold the bodies' relative pose as it is now, whatever their
+        // orientations (a fixed or prismatic joint between rotated links keeps its twist).
+        let frame = rapier3d::math::Pose::from_parts(anchor, Rotation::from_rotation_arc(Vector::X, a));
         let mut b = GenericJointBuilder::new(mask)
-            .local_anchor1(p1.inverse_transform_point(anchor))
-            .local_anchor2(p2.inverse_transform_point(anchor))
-            .local_axis1(p1.inverse_transform_vector(a))
-            .local_axis2(p2.inverse_transform_vector(a))
+            .local_frame1(p1.inverse() * frame)
+            .local_frame2(p2.inverse() * frame)
             .contacts_enabled(false);
         if let Some(m) = j.motor {
             b = b
@@ -339,15 +398,46 @@ impl RigidWorld {
         &self.joints[j.0].name
     }
 
-    /// Changes a joint motor's target velocity (rad/s or m/s).
-    pub fn set_motor_target(&mut self, j: JointId, target: f64) {
+    /// The free axis of a joint and its rapier data (`None` for a fixed joint).
+    fn free_axis(&mut self, j: JointId) -> Option<(JointAxis, &mut GenericJoint)> {
         let rec = &self.joints[j.0];
         let axis = match rec.kind {
             JointKind::Revolute => JointAxis::AngX,
             JointKind::Prismatic => JointAxis::LinX,
+            JointKind::Fixed => return None,
         };
-        if let Some(joint) = self.world.impulse_joints.get_mut(rec.handle, true) {
-            joint.data.set_motor_velocity(axis, target as Real, MOTOR_GAIN);
+        self.world.impulse_joints.get_mut(rec.handle, true).map(|joint| (axis, &mut joint.data))
+    }
+
+    /// Changes a joint motor's target velocity (rad/s or m/s). No effect on a fixed joint.
+    pub fn set_motor_target(&mut self, j: JointId, target: f64) {
+        if let Some((axis, data)) = self.free_axis(j) {
+            data.set_motor_velocity(axis, target as Real, MOTOR_GAIN);
+        }
+    }
+
+    /// Sets the largest torque (N m) or force (N) a joint's motor may apply.
+    pub fn set_motor_max_effort(&mut self, j: JointId, max_effort: f64) {
+        if let Some((axis, data)) = self.free_axis(j) {
+            data.set_motor_max_force(axis, max_effort as Real);
+        }
+    }
+
+    /// Drives a joint to a position (rad or m) with a spring of `stiffness` (N m/rad or N/m)
+    /// and `damping`, its effort limited to `max_effort`: a steering actuator. No effect on a
+    /// fixed joint.
+    pub fn set_motor_position(&mut self, j: JointId, target: f64, stiffness: f64, damping: f64, max_effort: f64) {
+        if let Some((axis, data)) = self.free_axis(j) {
+            data.set_motor_model(axis, MotorModel::ForceBased);
+            data.set_motor_position(axis, target as Real, stiffness as Real, damping as Real);
+            data.set_motor_max_force(axis, max_effort as Real);
+        }
+    }
+
+    /// Limits a revolute or prismatic joint's position to `[lower, upper]` (rad or m).
+    pub fn set_joint_limits(&mut self, j: JointId, lower: f64, upper: f64) {
+        if let Some((axis, data)) = self.free_axis(j) {
+            data.set_limits(axis, [lower as Real, upper as Real]);
         }
     }
 
@@ -447,7 +537,7 @@ impl RigidWorld {
 
 /// Damping gain of velocity motors (1/s, acceleration-based): stiff enough that a motor holds
 /// its target unless the effort limit is reached.
-const MOTOR_GAIN: Real = 1.0e4;
+pub const MOTOR_GAIN: Real = 1.0e4;
 
 fn waypoint(w: &[(f64, [f64; 3])], t: f64) -> [f64; 3] {
     if t <= w[0].0 {

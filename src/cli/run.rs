@@ -42,6 +42,13 @@ pub(super) fn run(
     }
     if !quiet {
         print!("{}", scene::describe(&scene));
+    } else {
+        // Joints a URDF importer could not honour are reported once, quiet or not.
+        for v in &scene.vehicles {
+            for u in &v.model.unsupported {
+                eprintln!("warning: vehicle \"{}\": {u}", v.name);
+            }
+        }
     }
     let out = match (out, &scene.output.dir) {
         (Some(o), _) => o.to_path_buf(),

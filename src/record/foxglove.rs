@@ -252,9 +252,10 @@ pub fn wrench_schema() -> Value {
     })
 }
 
-/// JSON schema of a rig topic (`/rig/<type>`): a timestamp, the run label (a wheel's slip, a
-/// plate's width; null for a single run) and one number per rig quantity.
-pub fn rig_schema(kind: &str, fields: &[&str]) -> Value {
+/// JSON schema of a topic of named numbers (`/rig/<type>`, `/vehicles/<name>`): a timestamp,
+/// the run label (a wheel's slip, a plate's width; null for a single run) and one number per
+/// quantity (null where undefined, e.g. the slip of a wheel that does not turn).
+pub fn values_schema(title: &str, fields: &[&str]) -> Value {
     let mut props = serde_json::Map::new();
     props.insert("timestamp".into(), time_schema());
     props.insert("run".into(), json!({"type": ["number", "null"]}));
@@ -264,8 +265,8 @@ pub fn rig_schema(kind: &str, fields: &[&str]) -> Value {
     let mut required = vec!["timestamp".to_string(), "run".to_string()];
     required.extend(fields.iter().map(|f| f.to_string()));
     json!({
-        "title": format!("regolith.Rig.{kind}"),
-        "description": format!("{kind} rig quantities (SI units), one message per recorded frame"),
+        "title": title,
+        "description": "Named quantities in SI units (angles in degrees), one message per recorded frame",
         "type": "object",
         "properties": props,
         "required": required

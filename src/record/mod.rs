@@ -9,6 +9,7 @@
 //! | `/bodies/shapes` | `foxglove.SceneUpdate`, each body's geometry locked to its frame | at the start of each run (a rig run may change a shape) |
 //! | `/bodies/wrench` | `regolith.BodyWrenches` | every frame, when the scene has bodies |
 //! | `/rig/<type>` | `regolith.Rig.<type>` (slip, sinkage, drawbar pull, cone index, …) | every frame of a rig run |
+//! | `/vehicles/<name>` | `regolith.Vehicle` (pose, speed, each wheel's slip, sinkage, spin) | every frame, per URDF vehicle |
 //!
 //! Frames are taken at t = 0 and then at the first exchange at or after each multiple of
 //! `output.every`, so a run of length T has ⌊T / every⌋ + 1 frames. A rig with several runs
@@ -46,7 +47,7 @@ struct Channels {
     tf: u16,
     shapes: u16,
     wrench: u16,
-    /// Rig topics by rig type, with their field names.
+    /// Rig and vehicle topics by topic name, with their field names.
     rigs: BTreeMap<String, (u16, Vec<String>)>,
 }
 
@@ -227,27 +228,38 @@ impl Recorder {
     }
 
     /// Records a rig's quantities with the frame the last step took (nothing when it took
-    /// none). `kind` names the topic `/rig/<kind>`; the field names must not change within a
-    /// run.
+    /// none) on `/rig/<kind>`. The field names must not change within a recording.
     pub fn rig<T: Real>(&mut self, sim: &Simulation<T>, kind: &str, fields: &[(&str, f64)]) -> Result<(), RunError> {
+        self.values(sim, &format!("/rig/{kind}"), &format!("regolith.Rig.{kind}"), fields)
+    }
+
+    /// Records named numbers on `topic` (schema `title`, made from the field names) with the
+    /// frame the last step took, if it took one.
+    pub fn values<T: Real>(
+        &mut self,
+        sim: &Simulation<T>,
+        topic: &str,
+        title: &str,
+        fields: &[(&str, f64)],
+    ) -> Result<(), RunError> {
         if !self.frame_now {
             return Ok(());
         }
         let names: Vec<String> = fields.iter().map(|(n, _)| n.to_string()).collect();
-        let channel = match self.channels.rigs.get(kind) {
+        let channel = match self.channels.rigs.get(topic) {
             Some((id, known)) if *known == names => *id,
             Some(_) => {
-                return Err(RunError::Build(format!("rig topic /rig/{kind} changed its fields within a recording")));
+                return Err(RunError::Build(format!("topic {topic} changed its fields within a recording")));
             }
             None => {
                 let refs: Vec<&str> = fields.iter().map(|(n, _)| *n).collect();
-                let schema = serde_json::to_vec(&foxglove::rig_schema(kind, &refs)).map_err(|e| self.io(&e))?;
+                let schema = serde_json::to_vec(&foxglove::values_schema(title, &refs)).map_err(|e| self.io(&e))?;
                 let path = self.path.clone();
                 let err = |e: mcap::McapError| RunError::Output { path: path.clone(), message: e.to_string() };
                 let Some(w) = self.writer.as_mut() else { return Ok(()) };
-                let sid = w.add_schema(&format!("regolith.Rig.{kind}"), "jsonschema", &schema).map_err(err)?;
-                let id = w.add_channel(sid, &format!("/rig/{kind}"), "json", &BTreeMap::new()).map_err(err)?;
-                self.channels.rigs.insert(kind.to_string(), (id, names));
+                let sid = w.add_schema(title, "jsonschema", &schema).map_err(err)?;
+                let id = w.add_channel(sid, topic, "json", &BTreeMap::new()).map_err(err)?;
+                self.channels.rigs.insert(topic.to_string(), (id, names));
                 id
             }
         };

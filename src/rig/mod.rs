@@ -327,10 +327,7 @@ fn wheel<T: Real>(
         sc.bodies[body].desc.motion = Motion::Free;
         place_on_soil(&mut sc, body)?;
         let centre = sc.bodies[body].desc.pose.translation;
-        let wheel_mass = match sc.bodies[body].desc.mass {
-            MassSpec::Mass(m) => m,
-            MassSpec::Density(d) => d * sc.bodies[body].desc.shape.volume(),
-        };
+        let wheel_mass = sc.bodies[body].desc.mass.mass_of(&sc.bodies[body].desc.shape);
         let mut sim = Simulation::<T>::new(&sc)?;
         let wheel_id = sim.rigid_id(Body(body));
         let v = slip.map_or(0.0, |s| omega * radius * (1.0 - s));

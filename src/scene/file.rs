@@ -19,6 +19,8 @@ pub(crate) struct SceneFile {
     pub bodies: Vec<BodyFile>,
     pub rig: Option<RigFile>,
     pub output: Option<OutputFile>,
+    #[serde(default)]
+    pub vehicles: Vec<super::vehicle::VehicleFile>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -38,6 +38,9 @@
 mod file;
 mod overrides;
 mod plan;
+pub mod vehicle;
+
+pub use vehicle::{Profile, VehicleSpec, WheelSpec};
 
 use std::path::{Path, PathBuf};
 
@@ -128,6 +131,8 @@ pub struct BodySpec {
     pub bce_layers: usize,
     /// The key it came from (`bodies[1]`).
     pub key: String,
+    /// What to draw in place of the collision shape (a URDF link's visual geometry).
+    pub visual: Option<ShapeDesc>,
 }
 
 /// How a plate is driven.
@@ -212,6 +217,8 @@ pub struct Scene {
     pub exchange_interval: f64,
     /// What the run records.
     pub output: OutputSpec,
+    /// URDF vehicles (their links are in `bodies`).
+    pub vehicles: Vec<VehicleSpec>,
 }
 
 /// The `[output]` section: where the run writes and what `recording.mcap` holds.
@@ -621,6 +628,13 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         let spec = resolve_body(path, source, dir, i, b, bce_layers as usize, &bodies)?;
         bodies.push(spec);
     }
+    let mut vehicles = Vec::new();
+    for (i, v) in file.vehicles.iter().enumerate() {
+        if vehicles.iter().any(|x: &VehicleSpec| Some(&x.name) == v.name.as_ref()) {
+            return Err(e(&format!("vehicles[{i}].name"), "is used twice; vehicle names must be unique".into()));
+        }
+        vehicles.push(vehicle::resolve_vehicle(path, i, v, bce_layers as usize, &mut bodies, &e)?);
+    }
     let rig = match &file.rig {
         None => None,
         Some(r) => Some(resolve_rig(path, source, r, &bodies, &file.bodies)?),
@@ -639,6 +653,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         rig,
         exchange_interval,
         output,
+        vehicles,
     })
 }
 
@@ -848,6 +863,7 @@ fn resolve_body(
         fsi,
         bce_layers: layers as usize,
         key,
+        visual: None,
     })
 }
 

@@ -135,15 +135,52 @@ pub fn describe(scene: &Scene) -> String {
         let mass = match b.desc.mass {
             regolith_rigid::MassSpec::Mass(m) => format!("{m} kg"),
             regolith_rigid::MassSpec::Density(d) => format!("{d} kg/m³ ({:.3} kg)", d * b.desc.shape.volume()),
+            regolith_rigid::MassSpec::Inertial { mass, .. } => format!("{mass} kg (inertial)"),
         };
         let _ = writeln!(
             s,
-            "  body \"{}\": {}, {mass}, at {:?}, {motion}, {}",
+            "  body \"{}\": {}, {mass}, at [{:.4}, {:.4}, {:.4}], {motion}, {}",
             b.desc.name,
             shape_name(&b.desc.shape),
-            b.desc.pose.translation,
+            b.desc.pose.translation[0],
+            b.desc.pose.translation[1],
+            b.desc.pose.translation[2],
             if b.fsi { format!("{n} BCE markers in {} layers", b.bce_layers) } else { "no soil contact".into() }
         );
+    }
+    for v in &scene.vehicles {
+        let m = &v.model;
+        let wheels: Vec<String> = v
+            .wheels
+            .iter()
+            .map(|w| {
+                format!(
+                    "{} (R = {} m, {})",
+                    m.links[w.link].name,
+                    w.radius,
+                    if w.side > 0.0 { "left" } else { "right" }
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "  vehicle \"{}\": {} ({} links, {} joints, {:.3} kg), wheels {}; {}; {}",
+            v.name,
+            m.path.display(),
+            m.links.len(),
+            m.joints.len(),
+            m.mass(),
+            if wheels.is_empty() { "none".to_string() } else { wheels.join(", ") },
+            if v.drive.is_empty() {
+                "not driven".to_string()
+            } else {
+                format!("{} wheel motors (≤ {} N m), {} steering joints", v.drive.len(), v.max_torque, v.steering.len())
+            },
+            if v.place_on_soil { "lowered onto the soil" } else { "at the given height" }
+        );
+        for u in &m.unsupported {
+            let _ = writeln!(s, "  warning: vehicle \"{}\": {u}", v.name);
+        }
     }
     if let Some(r) = &scene.rig {
         let line = match r {
