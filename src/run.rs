@@ -370,18 +370,17 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
     } else {
         let mut sim = Simulation::<T>::new(scene)?;
         let initial: Vec<[f64; 3]> = sim.system.fluid.positions().iter().map(|p| p.as_f64()).collect();
-        let mut series = (!scene.bodies.is_empty()).then(|| Series::new(&sim, false, &[]));
-        if let Some(s) = series.as_mut() {
-            s.push(&sim, None, &[]);
-        }
+        // Every run writes series.csv: the bodies and vehicles, then the soil's largest speed
+        // and kinetic energy (how a terrain scene settles).
+        let soil_columns = ["soil.max_speed", "soil.kinetic_energy"];
+        let mut series = Series::new(&sim, false, &soil_columns);
+        series.push(&sim, None, &[0.0, sim.soil_kinetic_energy()]);
         stepper.begin(&sim, None)?;
         stepper.vehicles(&sim)?;
         while sim.time() < scene.end_time * (1.0 - 1e-12) {
             match stepper.step(&mut sim) {
                 Ok(()) => {
-                    if let Some(s) = series.as_mut() {
-                        s.push(&sim, None, &[]);
-                    }
+                    series.push(&sim, None, &[stepper.last_speed, sim.soil_kinetic_energy()]);
                     stepper.vehicles(&sim)?;
                 }
                 Err(e) => {
@@ -390,6 +389,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
                 }
             }
         }
+        let series = Some(series);
         (Some(sim), series, None, None, Vec::new(), Some(initial))
     };
     stepper.finish_bar();

@@ -3,7 +3,8 @@
 //! (soil force and torque about the centre of mass in N and N m, centre-of-mass position and
 //! velocity, world frame), then per vehicle `<name>.x,.y,.z,.roll,.pitch,.yaw,.speed` (root link
 //! pose, roll–pitch–yaw in degrees, horizontal speed in m/s) and per wheel
-//! `<vehicle>/<link>.slip,.sinkage,.omega`, then the rig's own columns.
+//! `<vehicle>/<link>.slip,.sinkage,.omega`, then the rig's own columns (or, for scenes without a
+//! rig, `soil.max_speed` in m/s and `soil.kinetic_energy` in J).
 
 use std::io::Write as _;
 use std::path::Path;

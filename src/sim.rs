@@ -390,6 +390,17 @@ impl<T: Real> Simulation<T> {
             .collect()
     }
 
+    /// Kinetic energy of the soil still in the domain (J).
+    pub fn soil_kinetic_energy(&self) -> f64 {
+        let f = &self.system.fluid;
+        (0..f.active())
+            .map(|i| {
+                let v = f.velocities()[i].as_f64();
+                0.5 * f.masses()[i].as_f64() * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+            })
+            .sum()
+    }
+
     /// Effective soil surface height (m) over a disc of radius `r` around `(x, y)`: the top of
     /// the highest particle's cell there.
     pub fn surface_height(&self, x: f64, y: f64, r: f64) -> Option<f64> {

@@ -91,6 +91,10 @@ fn the_region_of_interest_keeps_only_the_points_inside_it() {
     let topics = common::read_validated(&out.join("recording.mcap"));
     assert_eq!(topics["/terrain/particles"].len(), 2);
     assert!(!topics.contains_key("/tf"), "no bodies, no frames");
+    // A terrain-only run still writes its time series: the soil settling.
+    let csv = std::fs::read_to_string(out.join("series.csv")).expect("series.csv");
+    assert_eq!(csv.lines().next(), Some("time,soil.max_speed,soil.kinetic_energy"));
+    assert_eq!(csv.lines().count(), 1 + 11, "a row at t = 0 and after each of the 10 exchanges");
     let first = points(&topics["/terrain/particles"][0].1);
     // Half the bed in x (the lattice is symmetric about x = 0.06: exactly half the columns).
     assert!(first.iter().all(|(v, _)| v[0] <= 0.06));
