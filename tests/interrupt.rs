@@ -16,7 +16,7 @@ fn sigint_stops_the_cli_run_with_its_outputs_written() {
     let out = common::out_dir("interrupt_cli");
     let scene = out.join("long.toml");
     std::fs::write(&scene, SCENE).expect("scene");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_regolith"))
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_regolith"))
         .arg("run")
         .arg(&scene)
         .arg("--out")
