@@ -421,7 +421,25 @@ mod tests {
             cone.contains_points(&[[0.0, 0.0, -0.024], [0.01, 0.0, -0.024], [0.0, 0.0, 0.03]], 0.0),
             vec![true, false, false]
         );
-        let cube = ShapeDesc::Mesh {
+        let cube = unit_cube();
+        assert_eq!(
+            cube.contains_points(&[[0.5, 0.5, 0.5], [1.5, 0.5, 0.5], [1.05, 0.5, 0.5], [0.5, 0.5, -0.2]], 0.1),
+            vec![true, false, true, false]
+        );
+        let wheel = ShapeDesc::Wheel {
+            radius: 0.1,
+            width: 0.05,
+            grousers: Some(Grousers { count: 4, height: 0.02, thickness: 0.01 }),
+        };
+        assert_eq!(
+            wheel.contains_points(&[[0.0, 0.0, 0.11], [0.0, 0.0, -0.11], [0.08, 0.0, 0.08], [0.0, 0.03, 0.0]], 0.0),
+            vec![true, true, false, false]
+        );
+    }
+
+    /// The unit cube [0, 1]³ as a closed, outward-facing triangle mesh.
+    fn unit_cube() -> ShapeDesc {
+        ShapeDesc::Mesh {
             vertices: vec![
                 [0.0, 0.0, 0.0],
                 [1.0, 0.0, 0.0],
@@ -446,20 +464,30 @@ mod tests {
                 [3, 0, 4],
                 [3, 4, 7],
             ],
-        };
-        assert_eq!(
-            cube.contains_points(&[[0.5, 0.5, 0.5], [1.5, 0.5, 0.5], [1.05, 0.5, 0.5], [0.5, 0.5, -0.2]], 0.1),
-            vec![true, false, true, false]
-        );
-        let wheel = ShapeDesc::Wheel {
+        }
+    }
+
+    #[test]
+    fn lowest_points_match_closed_forms() {
+        // A box of 0.2 × 0.1 × 0.04 m rolled 90° about x: its 0.1 m side stands vertical.
+        let b = ShapeDesc::Box { size: [0.2, 0.1, 0.04] };
+        let p = Pose::from_rpy_deg([0.0, 0.0, 1.0], [90.0, 0.0, 0.0]);
+        assert!((b.lowest_z(&p) - (1.0 - 0.05)).abs() < 1e-12);
+        // A z-axis cylinder tilted by θ about x reaches down h/2 cos θ + r sin θ.
+        let c = ShapeDesc::Cylinder { radius: 0.1, length: 0.4, axis: Axis::Z };
+        let th = 30.0_f64;
+        let p = Pose::from_rpy_deg([0.0; 3], [th, 0.0, 0.0]);
+        let want = -(0.2 * th.to_radians().cos() + 0.1 * th.to_radians().sin());
+        assert!((c.lowest_z(&p) - want).abs() < 1e-12);
+        // A wheel upright (axle along y) touches at radius + grouser height.
+        let w = ShapeDesc::Wheel {
             radius: 0.1,
             width: 0.05,
             grousers: Some(Grousers { count: 4, height: 0.02, thickness: 0.01 }),
         };
-        assert_eq!(
-            wheel.contains_points(&[[0.0, 0.0, 0.11], [0.0, 0.0, -0.11], [0.08, 0.0, 0.08], [0.0, 0.03, 0.0]], 0.0),
-            vec![true, true, false, false]
-        );
+        assert!((w.lowest_z(&Pose::default()) + 0.12).abs() < 1e-12);
+        assert!((unit_cube().lowest_z(&Pose::translation([0.0, 0.0, 2.0])) - 2.0).abs() < 1e-12);
+        assert_eq!(ShapeDesc::Compound(Vec::new()).lowest_z(&Pose::default()), f64::INFINITY);
     }
 
     #[test]
@@ -477,32 +505,7 @@ mod tests {
 
     #[test]
     fn volumes() {
-        let cube = ShapeDesc::Mesh {
-            vertices: vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-                [1.0, 0.0, 1.0],
-                [1.0, 1.0, 1.0],
-                [0.0, 1.0, 1.0],
-            ],
-            indices: vec![
-                [0, 2, 1],
-                [0, 3, 2],
-                [4, 5, 6],
-                [4, 6, 7],
-                [0, 1, 5],
-                [0, 5, 4],
-                [1, 2, 6],
-                [1, 6, 5],
-                [2, 3, 7],
-                [2, 7, 6],
-                [3, 0, 4],
-                [3, 4, 7],
-            ],
-        };
+        let cube = unit_cube();
         assert!((cube.volume() - 1.0).abs() < 1e-12);
         assert!((ShapeDesc::Box { size: [1.0, 2.0, 3.0] }.volume() - 6.0).abs() < 1e-12);
     }
