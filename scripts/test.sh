@@ -23,6 +23,9 @@ if ! have_vulkan; then
     $sudo_cmd apt-get install -y -qq --no-install-recommends mesa-vulkan-drivers libvulkan1 >/dev/null
 fi
 
+# Mesa's Vulkan loader warns on every device open without a runtime dir; give it one.
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+
 cargo fmt --all -- --check
 cargo test --release --workspace --all-targets
 cargo test --release --workspace --doc

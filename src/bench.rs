@@ -60,6 +60,8 @@ pub struct BenchResult {
     pub neighbours_per_particle: f64,
     /// Rayon threads.
     pub threads: usize,
+    /// Device adapter (`cpu` for the CPU backend).
+    pub adapter: String,
 }
 
 /// The bench scene for about `particles` soil particles.
@@ -110,7 +112,7 @@ fn bench_t<T: Real>(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -
     let n = m.solver.active();
     Ok(BenchResult {
         model: model.name(),
-        backend: "cpu".into(),
+        backend: m.solver.backend().into(),
         precision: T::NAME,
         particles: n,
         markers: m.solver.marker_positions().len(),
@@ -120,5 +122,6 @@ fn bench_t<T: Real>(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -
         interactions_per_s: pairs * evals / secs,
         neighbours_per_particle: pairs / (steps as f64 * n as f64),
         threads: rayon::current_num_threads(),
+        adapter: m.solver.adapter(),
     })
 }

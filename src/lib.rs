@@ -8,6 +8,7 @@
 pub mod bench;
 pub mod cli;
 pub mod element;
+pub mod gpu;
 pub mod input;
 pub mod material;
 pub mod plot;

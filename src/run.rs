@@ -5,9 +5,8 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use regolith_fsi::Real;
-use regolith_fsi::cpu::CpuSph;
 use regolith_fsi::rheology::{Material, Rheology};
+use regolith_fsi::{Real, SphSolver};
 use regolith_terrain::{RegionSpec, SoilRegion, TerrainBuild, build_terrain};
 use serde::Serialize;
 
@@ -56,8 +55,8 @@ fn stop_requested() -> bool {
 
 /// A built terrain simulation.
 pub struct SoilModel<T: Real> {
-    /// The SPH solver.
-    pub solver: CpuSph<T>,
+    /// The SPH solver (the scene's backend).
+    pub solver: Box<dyn SphSolver<T>>,
     /// What the terrain generator produced (container, domain, notes).
     pub terrain: TerrainBuild,
 }
@@ -88,7 +87,9 @@ pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, Terrai
 /// Builds the soil solver of a terrain scene (bodies ignored) in precision `T`.
 pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, RunError> {
     let (mats, terrain) = scene_terrain::<T>(scene)?;
-    let solver = CpuSph::new(scene.solver, mats, &terrain.particles, &terrain.markers, terrain.domain)?;
+    let wgpu = scene.backend == crate::scene::Backend::Wgpu;
+    let solver =
+        crate::gpu::make_solver(wgpu, scene.solver, mats, &terrain.particles, &terrain.markers, terrain.domain)?;
     Ok(SoilModel { solver, terrain })
 }
 
@@ -398,12 +399,12 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
         outputs.push(r.path().to_path_buf());
     }
     let wall = stepper.elapsed();
-    let fluid = sim.as_ref().map(|s| &s.system.fluid);
+    let fluid = sim.as_ref().map(|s| s.system.fluid.as_ref());
     let mut summary = Summary {
         schema_version: SUMMARY_SCHEMA_VERSION,
         scene: scene.path.display().to_string(),
-        backend: "cpu".into(),
-        adapter: "cpu".into(),
+        backend: fluid.map_or_else(|| "cpu".into(), |f| f.backend().into()),
+        adapter: fluid.map_or_else(|| "cpu".into(), |f| f.adapter()),
         precision: T::NAME.into(),
         particles: fluid.map_or(0, |f| f.len()),
         markers: fluid.map_or(0, |f| f.marker_positions().len()),
@@ -471,7 +472,10 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
         }
     }
     if let (Some(s), Some(i)) = (&sim, &initial) {
-        figures.push(("deposit_profile".into(), deposit_profile(scene, i, &s.system.fluid, summary.runout.as_ref())));
+        figures.push((
+            "deposit_profile".into(),
+            deposit_profile(scene, i, s.system.fluid.as_ref(), summary.runout.as_ref()),
+        ));
     }
     for (stem, fig) in &figures {
         let files = crate::plot::write_figure(fig, &opts.out, stem)
@@ -514,7 +518,7 @@ pub struct ParticleRow {
 }
 
 /// The output values of active particle `i`.
-pub fn particle_row<T: Real>(s: &CpuSph<T>, i: usize) -> ParticleRow {
+pub fn particle_row<T: Real>(s: &dyn SphSolver<T>, i: usize) -> ParticleRow {
     let sig = s.stresses()[i];
     let material = s.material_ids()[i];
     let pc = match s.materials()[material as usize].rheology {
@@ -532,7 +536,7 @@ pub fn particle_row<T: Real>(s: &CpuSph<T>, i: usize) -> ParticleRow {
 }
 
 /// `x,y,z,vx,vy,vz,p,q,pc,material` for every active particle.
-pub fn write_particles_csv<T: Real>(path: &Path, s: &CpuSph<T>) -> Result<(), RunError> {
+pub fn write_particles_csv<T: Real>(path: &Path, s: &dyn SphSolver<T>) -> Result<(), RunError> {
     let io = |e: std::io::Error| RunError::Output { path: path.to_path_buf(), message: e.to_string() };
     let f = std::fs::File::create(path).map_err(io)?;
     let mut w = std::io::BufWriter::new(f);
@@ -610,7 +614,7 @@ fn vehicle_figure(s: &Series, v: &crate::scene::VehicleSpec) -> crate::plot::Fig
 fn deposit_profile<T: Real>(
     scene: &Scene,
     initial: &[[f64; 3]],
-    s: &CpuSph<T>,
+    s: &dyn SphSolver<T>,
     runout: Option<&Runout>,
 ) -> crate::plot::Figure {
     let d0 = scene.solver.spacing;
@@ -658,7 +662,7 @@ fn deposit_radius(points: impl Iterator<Item = [f64; 3]>, axis: [f64; 2], d0: f6
     r[k] + 0.5 * d0
 }
 
-fn column_runout<T: Real>(scene: &Scene, initial: &[[f64; 3]], s: &CpuSph<T>) -> Option<Runout> {
+fn column_runout<T: Real>(scene: &Scene, initial: &[[f64; 3]], s: &dyn SphSolver<T>) -> Option<Runout> {
     if scene.soil.len() != 1 {
         return None;
     }

@@ -208,8 +208,10 @@ impl<T: Real> Simulation<T> {
             wall_markers: &terrain.markers,
             domain: (lo, hi),
         };
-        let system =
-            FsiSystem::new(soil, rigid, fsi_bodies, scene.exchange_interval).map_err(|e| build(e.to_string()))?;
+        let wgpu = scene.backend == crate::scene::Backend::Wgpu;
+        let make = |c, m, p: &[_], mk: &[_], d| crate::gpu::make_solver::<T>(wgpu, c, m, p, mk, d);
+        let system = FsiSystem::with_solver(soil, rigid, fsi_bodies, scene.exchange_interval, &make)
+            .map_err(|e| build(e.to_string()))?;
         let mut sim = Self { system, scene: scene.clone(), terrain, ids, fsi, vehicle_joints, surface0 };
         sim.apply_drives();
         Ok(sim)
@@ -260,7 +262,11 @@ impl<T: Real> Simulation<T> {
     /// profiles are applied at the start of the interval.
     pub fn step_max(&mut self, max: Option<f64>) -> Result<ExchangeReport, RunError> {
         self.apply_drives();
-        Ok(self.system.advance(max)?)
+        let r = self.system.advance(max)?;
+        // A device backend refreshes its host copy of the particles once per exchange, for
+        // the series, rigs and recording that read them (a no-op on the CPU).
+        self.system.fluid.sync()?;
+        Ok(r)
     }
 
     /// Sets every vehicle's wheel motor targets and steering angles for the current time.

@@ -66,7 +66,7 @@ fn the_soil_feels_exactly_the_opposite_of_what_the_bodies_feel() {
             }
         }
     }
-    let owner = sim.system.fluid.owner_impulse();
+    let owner = sim.system.fluid.as_cpu().expect("cpu").owner_impulse();
     let scale = mass * 9.81 * sim.time();
     for k in 0..2 {
         for a in 0..3 {
@@ -76,7 +76,7 @@ fn the_soil_feels_exactly_the_opposite_of_what_the_bodies_feel() {
     }
     assert!(body_impulse[0][0].abs() > 1e-3 * scale, "the ball must push the soil");
     let p1 = sim.system.fluid.momentum();
-    let total = sim.system.fluid.marker_impulse();
+    let total = sim.system.fluid.as_cpu().expect("cpu").marker_impulse();
     for a in 0..3 {
         let expected = mass * scene.solver.gravity[a] * sim.time() + total[a];
         assert!(((p1[a] - p0[a]) - expected).abs() < 1e-9 * scale, "momentum balance axis {a}");

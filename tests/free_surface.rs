@@ -24,7 +24,7 @@ fn flags_the_top_layer_and_nothing_deep() {
             let d0 = scene.solver.spacing;
             let mut m = build_soil::<f64>(&scene).expect("builds");
             m.solver.step(None).expect("step");
-            let s = &m.solver;
+            let s = m.solver.as_cpu().expect("a CPU scene");
             let n = s.active();
             // The single particle floating above the bed (z ≈ 0.36) is detached.
             let top_z = 10.0 * d0;
@@ -69,7 +69,7 @@ fn zero_mode_zeroes_surface_stress() {
     let scene = common::scene(&bed("wendland", 1.2, "free_surface_stress = \"zero\"\n"));
     let mut m = build_soil::<f32>(&scene).expect("builds");
     m.solver.step(None).expect("step");
-    let s = &m.solver;
+    let s = m.solver.as_cpu().expect("a CPU scene");
     let flagged: Vec<usize> = (0..s.active()).filter(|&i| s.free_surface()[i]).collect();
     assert!(flagged.len() > 50);
     for i in flagged {

@@ -35,7 +35,7 @@ fn settle<T: Real>(text: &str) -> Outcome {
     while m.solver.time() < scene.end_time {
         max_speed = m.solver.step(Some(scene.end_time - m.solver.time())).expect("step").max_speed;
     }
-    let s = &m.solver;
+    let s = m.solver.as_cpu().expect("a CPU scene");
     let n = s.active();
     let d0 = scene.solver.spacing;
     let pos: Vec<[f64; 3]> = s.positions()[..n].iter().map(|p| p.as_f64()).collect();

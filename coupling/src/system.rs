@@ -22,9 +22,11 @@
 
 use std::ops::Range;
 
+use regolith_fsi::config::SolverConfig;
 use regolith_fsi::cpu::CpuSph;
 use regolith_fsi::math::Vec3;
-use regolith_fsi::{MarkerInit, ParticleInit, Real, SolverError};
+use regolith_fsi::rheology::Material;
+use regolith_fsi::{MarkerInit, ParticleInit, Real, SolverError, SphSolver};
 use regolith_rigid::{BodyId, BodyState, Motion, RigidWorld, quat_mul, quat_rotate};
 
 use crate::CouplingError;
@@ -96,21 +98,25 @@ fn conj(q: [f64; 4]) -> [f64; 4] {
 
 impl FsiInterface {
     /// Places every FSI body's markers (position, velocity, acceleration) from its state.
-    pub fn place_markers<T: Real>(&self, fluid: &mut CpuSph<T>, states: &[BodyState]) {
-        let k = fluid.marker_kinematics_mut();
+    pub fn place_markers<T: Real>(&self, fluid: &mut dyn SphSolver<T>, states: &[BodyState]) {
+        let (mut pos, mut vel, mut acc) = (Vec::new(), Vec::new(), Vec::new());
         for (b, s) in self.bodies.iter().zip(states) {
-            for (i, local) in b.markers.clone().zip(&b.local) {
+            pos.clear();
+            vel.clear();
+            acc.clear();
+            for local in &b.local {
                 let x = s.to_world(*local);
-                k.pos[i] = Vec3::of(x);
-                k.vel[i] = Vec3::of(s.velocity_at(x));
-                k.acc[i] = Vec3::of(s.acceleration_at(x));
+                pos.push(Vec3::of(x));
+                vel.push(Vec3::of(s.velocity_at(x)));
+                acc.push(Vec3::of(s.acceleration_at(x)));
             }
+            fluid.set_marker_kinematics(b.markers.start, &pos, &vel, &acc);
         }
     }
 
-    /// The soil's wrench on each body from the current marker forces, torques about `states`'
+    /// The soil's wrench on each body from the current marker forces, torques about `states'`
     /// centres of mass.
-    pub fn wrenches<T: Real>(&self, fluid: &CpuSph<T>, states: &[BodyState]) -> Vec<Wrench> {
+    pub fn wrenches<T: Real>(&self, fluid: &dyn SphSolver<T>, states: &[BodyState]) -> Vec<Wrench> {
         let f = fluid.marker_forces();
         let x = fluid.marker_positions();
         self.bodies
@@ -151,8 +157,8 @@ pub struct ExchangeReport {
 
 /// Soil, bodies and the interface between them.
 pub struct FsiSystem<T: Real> {
-    /// The SPH soil.
-    pub fluid: CpuSph<T>,
+    /// The SPH soil (CPU or wgpu backend).
+    pub fluid: Box<dyn SphSolver<T>>,
     /// The rigid bodies.
     pub rigid: RigidWorld,
     /// What crosses between them.
@@ -167,9 +173,9 @@ pub struct FsiSystem<T: Real> {
 /// What the soil solver of an [`FsiSystem`] is built from.
 pub struct SoilInit<'a, T> {
     /// Solver settings.
-    pub config: regolith_fsi::config::SolverConfig,
+    pub config: SolverConfig,
     /// Materials.
-    pub materials: Vec<regolith_fsi::rheology::Material<T>>,
+    pub materials: Vec<Material<T>>,
     /// Soil particles.
     pub particles: &'a [ParticleInit],
     /// Fixed (wall) markers.
@@ -178,14 +184,38 @@ pub struct SoilInit<'a, T> {
     pub domain: ([f64; 3], [f64; 3]),
 }
 
+/// Builds a soil solver from its settings, materials, particles, markers and domain: how a
+/// caller picks the backend.
+pub type SolverMaker<'a, T> = &'a dyn Fn(
+    SolverConfig,
+    Vec<Material<T>>,
+    &[ParticleInit],
+    &[MarkerInit],
+    ([f64; 3], [f64; 3]),
+) -> Result<Box<dyn SphSolver<T>>, SolverError>;
+
 impl<T: Real> FsiSystem<T> {
-    /// Builds the system. Each `(body, local markers)` pair adds an FSI body whose markers are
-    /// placed from the rigid world's current state.
+    /// Builds the system on the CPU backend. Each `(body, local markers)` pair adds an FSI
+    /// body whose markers are placed from the rigid world's current state.
     pub fn new(
         soil: SoilInit<'_, T>,
         rigid: RigidWorld,
         fsi_bodies: Vec<(BodyId, Vec<[f64; 3]>)>,
         exchange_interval: f64,
+    ) -> Result<Self, CouplingError> {
+        let cpu = |c, m, p: &[ParticleInit], mk: &[MarkerInit], d| -> Result<Box<dyn SphSolver<T>>, SolverError> {
+            Ok(Box::new(CpuSph::new(c, m, p, mk, d)?))
+        };
+        Self::with_solver(soil, rigid, fsi_bodies, exchange_interval, &cpu)
+    }
+
+    /// As [`FsiSystem::new`], with the soil solver built by `make`.
+    pub fn with_solver(
+        soil: SoilInit<'_, T>,
+        rigid: RigidWorld,
+        fsi_bodies: Vec<(BodyId, Vec<[f64; 3]>)>,
+        exchange_interval: f64,
+        make: SolverMaker<'_, T>,
     ) -> Result<Self, CouplingError> {
         let SoilInit { config: fluid_config, materials, particles, wall_markers, domain } = soil;
         if !(exchange_interval > 0.0 && exchange_interval.is_finite()) {
@@ -199,7 +229,7 @@ impl<T: Real> FsiSystem<T> {
             markers.extend(local.iter().map(|l| MarkerInit { pos: s.to_world(*l), owner: k as u32 + 1 }));
             bodies.push(FsiBody { body, local, markers: start..markers.len() });
         }
-        let fluid = CpuSph::new(fluid_config, materials, particles, &markers, domain).map_err(CouplingError::Solver)?;
+        let fluid = make(fluid_config, materials, particles, &markers, domain).map_err(CouplingError::Solver)?;
         let n = bodies.len();
         let mut sys = Self {
             fluid,
@@ -210,7 +240,7 @@ impl<T: Real> FsiSystem<T> {
             time: 0.0,
         };
         let states = sys.states_at(0.0);
-        sys.interface.place_markers(&mut sys.fluid, &states);
+        sys.interface.place_markers(sys.fluid.as_mut(), &states);
         Ok(sys)
     }
 
@@ -240,12 +270,12 @@ impl<T: Real> FsiSystem<T> {
         while tau < delta * (1.0 - 1e-12) {
             // 1. Markers from the body states extrapolated to the substep's start.
             let states = self.states_at(tau);
-            self.interface.place_markers(&mut self.fluid, &states);
+            self.interface.place_markers(self.fluid.as_mut(), &states);
             // 2. One soil substep.
             let r = self.fluid.step(Some(delta - tau))?;
             // Forces of the substep's final stage, torques about the mid-substep centre of mass.
             let mid = self.states_at(tau + 0.5 * r.dt);
-            for (acc, w) in sum.iter_mut().zip(self.interface.wrenches(&self.fluid, &mid)) {
+            for (acc, w) in sum.iter_mut().zip(self.interface.wrenches(self.fluid.as_ref(), &mid)) {
                 acc.force = add(acc.force, scale(w.force, r.dt));
                 acc.torque = add(acc.torque, scale(w.torque, r.dt));
             }

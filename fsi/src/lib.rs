@@ -15,6 +15,8 @@ pub mod math;
 mod particles;
 mod real;
 pub mod rheology;
+mod solver;
 
 pub use particles::{MarkerInit, ParticleInit, SolverError, StepReport};
 pub use real::Real;
+pub use solver::SphSolver;

@@ -24,9 +24,6 @@ pub(super) fn run(
     if steps == 0 {
         return Err(InputError::flag("--steps", "must be at least 1").into());
     }
-    if backend == BackendArg::Wgpu {
-        return Err(InputError::flag("--backend", "wgpu is not available in this build; use cpu").into());
-    }
     let prec = match precision {
         Precision::F32 => scene::Precision::F32,
         Precision::F64 => scene::Precision::F64,
@@ -38,10 +35,18 @@ pub(super) fn run(
     };
     let mut results = Vec::new();
     for m in models {
-        let scene = bench_scene(particles, m, prec)?;
+        let mut scene = bench_scene(particles, m, prec)?;
+        scene.backend = match backend {
+            BackendArg::Auto => scene::Backend::Auto,
+            BackendArg::Cpu => scene::Backend::Cpu,
+            BackendArg::Wgpu => scene::Backend::Wgpu,
+        };
+        scene.precision_set = true;
+        let chosen = crate::gpu::resolve_backend(&mut scene).map_err(|m| InputError::flag("--backend", m))?;
+        eprintln!("{chosen}");
         let r = run_bench(&scene, m, warmup, steps).context("bench run failed")?;
         println!(
-            "bench {:<15} {} {}: {} particles, {} markers, {} steps in {:.2} s: {:.3e} particle-steps/s, {:.3e} neighbour interactions/s ({:.1} neighbours/particle, {} threads)",
+            "bench {:<15} {} {}: {} particles, {} markers, {} steps in {:.2} s: {:.3e} particle-steps/s, {:.3e} neighbour interactions/s ({:.1} neighbours/particle, {} threads, adapter {})",
             r.model,
             r.backend,
             r.precision,
@@ -52,7 +57,8 @@ pub(super) fn run(
             r.particle_steps_per_s,
             r.interactions_per_s,
             r.neighbours_per_particle,
-            r.threads
+            r.threads,
+            r.adapter
         );
         results.push(r);
     }

@@ -28,17 +28,11 @@ pub(super) fn run(
             Precision::F32 => scene::Precision::F32,
             Precision::F64 => scene::Precision::F64,
         };
+        scene.precision_set = true;
     }
-    match scene.backend {
-        Backend::Cpu => {}
-        Backend::Auto => {
-            if !quiet {
-                eprintln!("backend auto: no wgpu backend in this build, using cpu");
-            }
-        }
-        Backend::Wgpu => {
-            return Err(InputError::flag("--backend", "wgpu is not available in this build; use cpu or auto").into());
-        }
+    let chosen = crate::gpu::resolve_backend(&mut scene).map_err(|m| InputError::flag("--backend", m))?;
+    if !quiet {
+        println!("{chosen}");
     }
     if !quiet {
         print!("{}", scene::describe(&scene));

@@ -205,7 +205,7 @@ impl Recorder {
     /// Particles selected by decimation (by particle id, a fixed subset) and the region of
     /// interest, packed as the point-cloud fields.
     fn pack_particles<T: Real>(&self, sim: &Simulation<T>) -> Vec<u8> {
-        let s = &sim.system.fluid;
+        let s = sim.system.fluid.as_ref();
         let k = self.spec.decimate as u32;
         let mut data = Vec::with_capacity(s.active() / self.spec.decimate.max(1) * foxglove::POINT_STRIDE + 1);
         for i in 0..s.active() {

@@ -201,6 +201,9 @@ pub struct Scene {
     pub backend: Backend,
     /// Precision.
     pub precision: Precision,
+    /// True when the precision was chosen (in the file or on the command line) rather than
+    /// defaulted: `auto` and `wgpu` may then not switch it to f32.
+    pub precision_set: bool,
     /// Solver settings.
     pub solver: SolverConfig,
     /// Materials, by index.
@@ -336,10 +339,15 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         BackendName::Cpu => Backend::Cpu,
         BackendName::Wgpu => Backend::Wgpu,
     };
-    let precision = match sim.precision.unwrap_or(PrecisionName::F64) {
-        PrecisionName::F32 => Precision::F32,
-        PrecisionName::F64 => Precision::F64,
-    };
+    let precision_set = sim.precision.is_some();
+    if backend == Backend::Wgpu && matches!(sim.precision, Some(PrecisionName::F64)) {
+        return Err(e("simulation.precision", "the wgpu backend runs in f32: use \"f32\" or backend \"cpu\"".into()));
+    }
+    let precision =
+        match sim.precision.unwrap_or(if backend == Backend::Wgpu { PrecisionName::F32 } else { PrecisionName::F64 }) {
+            PrecisionName::F32 => Precision::F32,
+            PrecisionName::F64 => Precision::F64,
+        };
 
     let sph = file.sph.ok_or_else(|| e("sph", "section [sph] is required (at least spacing)".into()))?;
     let spacing =
@@ -645,6 +653,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         end_time,
         backend,
         precision,
+        precision_set,
         solver,
         materials,
         container,

@@ -58,6 +58,19 @@ pub fn describe(scene: &Scene) -> String {
         sv.h_factor,
         sv.artificial_viscosity
     );
+    // The effects the solver is specialised for (the wgpu pipeline's constants and modules,
+    // the CPU backend's monomorphised loops).
+    let mats32: Vec<_> = scene.materials.iter().filter_map(|m| m.params.build::<f32>().ok()).collect();
+    let mut effects = regolith_wgpu::Effects::resolve(sv, &mats32).names();
+    let fs = match sv.free_surface_threshold {
+        Some(t) => format!("free-surface(λ < {t})"),
+        None => "free-surface off".into(),
+    };
+    let fsi = scene.bodies.iter().filter(|b| b.fsi).count();
+    let fsi = format!("fsi-bodies={fsi}");
+    effects.push(&fs);
+    effects.push(&fsi);
+    let _ = writeln!(s, "  effects: {}", effects.join(", "));
     let mut min_dt = f64::INFINITY;
     for m in &scene.materials {
         let Ok(mat) = m.params.build::<f64>() else { continue };

@@ -1,0 +1,45 @@
+// Step bookkeeping: `reset` clears the step's maxima and error slot, `maxima` takes the
+// largest speed and acceleration after the first stage, `choose_dt` sets the step
+// dt = C min(h / (c_max + |v|max), sqrt(h / |a|max)) (or the fixed step), at most the largest
+// step allowed and the host's limit. CPU twin: `CpuSph::choose_dt`.
+
+@group(0) @binding(0) var<uniform> prm: Params;
+@group(0) @binding(1) var<storage, read> parts: array<Particle>;
+@group(0) @binding(2) var<storage, read> rates: array<Rate>;
+@group(0) @binding(3) var<storage, read_write> info: Info;
+
+@compute @workgroup_size(1)
+fn reset() {
+    atomicStore(&info.cmax, 0u);
+    atomicStore(&info.vmax, 0u);
+    atomicStore(&info.amax, 0u);
+    atomicStore(&info.pairs, 0u);
+    atomicStore(&info.err_id, 0xffffffffu);
+    atomicStore(&info.err_code, 0u);
+    atomicStore(&info.vmax_end, 0u);
+    atomicStore(&info.amax_end, 0u);
+}
+
+@compute @workgroup_size(64)
+fn maxima(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= info.n_active) { return; }
+    let p = parts[i];
+    let r = rates[i];
+    atomicMax(&info.vmax, max_bits(length(vec3<f32>(p.vx, p.vy, p.vz))));
+    atomicMax(&info.amax, max_bits(length(vec3<f32>(r.ax, r.ay, r.az))));
+}
+
+@compute @workgroup_size(1)
+fn choose_dt() {
+    var dt = prm.dt_fixed;
+    if (ADAPTIVE) {
+        let cmax = max(prm.ref_cs, bitcast<f32>(atomicLoad(&info.cmax)));
+        let vmax = bitcast<f32>(atomicLoad(&info.vmax));
+        let amax = bitcast<f32>(atomicLoad(&info.amax));
+        dt = prm.cfl * prm.h / (cmax + vmax);
+        if (amax > 0.0) { dt = min(dt, prm.cfl * sqrt(prm.h / amax)); }
+        dt = min(dt, prm.dt_max);
+    }
+    info.dt = min(dt, info.max_dt);
+}

@@ -1,0 +1,156 @@
+//! Device record layouts: `#[repr(C)]` + `Pod` mirrors of the structs in `kernels/common.wgsl`
+//! (every field 4 bytes, so WGSL's array strides equal `size_of`).
+
+use bytemuck::{Pod, Zeroable};
+
+/// Solver constants (uniform).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Params {
+    pub origin: [f32; 3],
+    pub inv_cell: f32,
+    pub dims: [u32; 3],
+    pub n_cells: u32,
+    pub n: u32,
+    pub nm: u32,
+    pub reach: u32,
+    pub radius2: f32,
+    pub h: f32,
+    pub inv_h: f32,
+    pub alpha: f32,
+    pub support2: f32,
+    pub visc_alpha: f32,
+    pub eta2: f32,
+    pub m_volume: f32,
+    pub ref_rho: f32,
+    pub gravity: [f32; 3],
+    pub ref_cs: f32,
+    pub xsph_eps: f32,
+    pub shift: f32,
+    pub max_shift: f32,
+    pub fs_threshold: f32,
+    pub detach_threshold: f32,
+    pub cfl: f32,
+    pub dt_max: f32,
+    pub dt_fixed: f32,
+}
+
+/// One soil particle.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Particle {
+    pub pos: [f32; 3],
+    pub vel: [f32; 3],
+    pub rho: f32,
+    pub sigma: [f32; 6],
+    pub pc: f32,
+    pub sv: f32,
+    pub mass: f32,
+    pub material: u32,
+    pub id: u32,
+    pub flags: u32,
+    pub pad: u32,
+}
+
+/// Flag bit: free surface.
+pub const FLAG_FREE: u32 = 1;
+/// Flag bit: detached (no stress).
+pub const FLAG_DETACHED: u32 = 2;
+
+/// What a neighbour reads of a particle or marker.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Packed {
+    pub x: [f32; 3],
+    pub v: [f32; 3],
+    pub s: [f32; 6],
+    pub vol: f32,
+    pub mass: f32,
+    pub rho: f32,
+    pub cs: f32,
+}
+
+/// The rates of one stage.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Rate {
+    pub drho: f32,
+    pub acc: [f32; 3],
+    pub dsigma: [f32; 6],
+    pub d: [f32; 6],
+    pub xsph: [f32; 3],
+    pub grad_c: [f32; 3],
+    pub fs: f32,
+    pub bulk: f32,
+    pub shear: f32,
+    pub pad: f32,
+}
+
+/// A boundary marker (original order): kinematics and owner.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Marker {
+    pub pos: [f32; 3],
+    pub vel: [f32; 3],
+    pub acc: [f32; 3],
+    pub owner: u32,
+}
+
+/// Step bookkeeping (see `Info` in common.wgsl); maxima are f32 bit patterns.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Info {
+    pub active: u32,
+    pub dt: f32,
+    pub max_dt: f32,
+    pub pad0: u32,
+    pub cmax: u32,
+    pub vmax: u32,
+    pub amax: u32,
+    pub pairs: u32,
+    pub err_id: u32,
+    pub err_code: u32,
+    pub vmax_end: u32,
+    pub amax_end: u32,
+}
+
+/// A material (see `Material` in materials.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Material {
+    pub model: u32,
+    pub density: f32,
+    pub bulk: f32,
+    pub shear: f32,
+    pub poisson: f32,
+    pub mu_s: f32,
+    pub mu_2: f32,
+    pub i0: f32,
+    pub grain_d: f32,
+    pub grain_rho: f32,
+    pub k: f32,
+    pub m: f32,
+    pub kappa: f32,
+    pub lambda: f32,
+    pub clamp: u32,
+    pub clamp_lo: f32,
+    pub clamp_hi: f32,
+    pub pc_floor: f32,
+    pub pad: [f32; 2],
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_match_the_wgsl_structs() {
+        assert_eq!(size_of::<Params>(), 32 * 4);
+        assert_eq!(size_of::<Particle>(), 20 * 4);
+        assert_eq!(size_of::<Packed>(), 16 * 4);
+        assert_eq!(size_of::<Rate>(), 26 * 4);
+        assert_eq!(size_of::<Marker>(), 10 * 4);
+        assert_eq!(size_of::<Info>(), 12 * 4);
+        assert_eq!(size_of::<Material>(), 20 * 4);
+    }
+}

@@ -1,0 +1,852 @@
+//! [`GpuSph`]: the soil on the device, stepped by the kernels in the CPU backend's order.
+
+use std::sync::mpsc;
+
+use bytemuck::Zeroable;
+use regolith_fsi::config::{DETACHED_THRESHOLD, FreeSurfaceStress, Integrator, KernelKind, SolverConfig, TimeStep};
+use regolith_fsi::cpu::GridSpec;
+use regolith_fsi::kernel::{CubicSpline, Kernel, WendlandC2};
+use regolith_fsi::math::{Sym3, Vec3};
+use regolith_fsi::rheology::{Material, PointState, Rheology, RheologyError};
+use regolith_fsi::{MarkerInit, ParticleInit, SolverError, SphSolver, StepReport};
+
+use crate::GpuError;
+use crate::kernels::{
+    advance::Advance, dispatch, extrapolate::Extrapolate, forces::Forces, pack::Pack, permute::Permute, rates::Rates,
+    scan::Scan, sort::Sort, step_info::StepInfo,
+};
+use crate::layout::{self, Info, Marker, Packed, Params, Particle, Rate};
+use crate::shader::{Effects, bind, groups};
+
+impl Effects {
+    /// The effects of a solver configuration and its materials.
+    pub fn resolve(cfg: &SolverConfig, materials: &[Material<f32>]) -> Self {
+        Self {
+            cubic: cfg.kernel == KernelKind::Cubic,
+            viscosity: cfg.artificial_viscosity > 0.0,
+            xsph: cfg.shifting.xsph(),
+            ppst: cfg.shifting.ppst(),
+            zero_surface: cfg.free_surface_stress == FreeSurfaceStress::Zero,
+            rk2: cfg.integrator == Integrator::Rk2,
+            adaptive: matches!(cfg.time_step, TimeStep::Adaptive { .. }),
+            dp: materials.iter().any(|m| matches!(m.rheology, Rheology::DruckerPrager(_))),
+            mcc: materials.iter().any(|m| matches!(m.rheology, Rheology::Mcc(_))),
+        }
+    }
+}
+
+struct Kernels {
+    sort_soil: Sort,
+    sort_markers: Sort,
+    scan: Scan,
+    permute: Permute,
+    pack: Pack,
+    extrapolate: Extrapolate,
+    rates: Rates,
+    forces: Forces,
+    info: StepInfo,
+    advance: Advance,
+}
+
+struct Buffers {
+    params: wgpu::Buffer,
+    materials: wgpu::Buffer,
+    parts: wgpu::Buffer,
+    tmp: wgpu::Buffer,
+    stage: wgpu::Buffer,
+    packed: wgpu::Buffer,
+    moduli: wgpu::Buffer,
+    rates: wgpu::Buffer,
+    info: wgpu::Buffer,
+    cell_of: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    start: wgpu::Buffer,
+    sums: wgpu::Buffer,
+    order: wgpu::Buffer,
+    markers: wgpu::Buffer,
+    m_sorted: wgpu::Buffer,
+    m_limit: wgpu::Buffer,
+    m_cell_of: wgpu::Buffer,
+    m_counts: wgpu::Buffer,
+    m_start: wgpu::Buffer,
+    m_sums: wgpu::Buffer,
+    m_order: wgpu::Buffer,
+    m_packed: wgpu::Buffer,
+    m_force: wgpu::Buffer,
+    info_read: wgpu::Buffer,
+    force_read: wgpu::Buffer,
+    parts_read: wgpu::Buffer,
+    rates_read: wgpu::Buffer,
+}
+
+struct Groups {
+    sort_soil: wgpu::BindGroup,
+    sort_markers: wgpu::BindGroup,
+    scan_soil: wgpu::BindGroup,
+    scan_markers: wgpu::BindGroup,
+    permute: wgpu::BindGroup,
+    set_active: wgpu::BindGroup,
+    gather: wgpu::BindGroup,
+    pack: [wgpu::BindGroup; 2],
+    extrapolate: [wgpu::BindGroup; 2],
+    rates: [wgpu::BindGroup; 2],
+    forces: wgpu::BindGroup,
+    info: wgpu::BindGroup,
+    advance: wgpu::BindGroup,
+}
+
+/// Host copy of the particles, refreshed by `sync`.
+#[derive(Default)]
+struct Mirror {
+    pos: Vec<Vec3<f32>>,
+    vel: Vec<Vec3<f32>>,
+    rho: Vec<f32>,
+    sigma: Vec<Sym3<f32>>,
+    state: Vec<PointState<f32>>,
+    material: Vec<u16>,
+    mass: Vec<f32>,
+    id: Vec<u32>,
+    flags: Vec<u32>,
+    acc: Vec<Vec3<f32>>,
+    fs: Vec<f32>,
+}
+
+/// SPH soil on a wgpu device, in f32.
+pub struct GpuSph {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    adapter: String,
+    cfg: SolverConfig,
+    materials: Vec<Material<f32>>,
+    effects: Effects,
+    variants: Vec<String>,
+    grid: GridSpec,
+    n: usize,
+    nm: usize,
+    n_cells: usize,
+    k: Kernels,
+    b: Buffers,
+    g: Groups,
+    active: usize,
+    time: f64,
+    steps: u64,
+    markers_dirty: bool,
+    /// First marker that belongs to a body: forces from here on are read back every step.
+    first_body_marker: usize,
+    m_host: Vec<Marker>,
+    m_pos: Vec<Vec3<f32>>,
+    m_force: Vec<Vec3<f32>>,
+    mirror: Mirror,
+}
+
+const USAGE: wgpu::BufferUsages =
+    wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_DST).union(wgpu::BufferUsages::COPY_SRC);
+
+fn gpu_material(m: &Material<f32>) -> layout::Material {
+    let mut g = layout::Material {
+        density: m.density,
+        bulk: m.elastic.bulk,
+        shear: m.elastic.shear,
+        poisson: m.poisson,
+        ..layout::Material::zeroed()
+    };
+    match &m.rheology {
+        Rheology::Elastic => g.model = 0,
+        Rheology::DruckerPrager(dp) => {
+            g.model = 1;
+            g.mu_s = dp.mu_s;
+            g.mu_2 = dp.mu_2;
+            g.i0 = dp.i0;
+            g.grain_d = dp.grain_diameter;
+            g.grain_rho = dp.grain_density;
+            g.k = dp.k;
+        }
+        Rheology::Mcc(mcc) => {
+            g.model = 2;
+            g.m = mcc.m;
+            g.kappa = mcc.kappa;
+            g.lambda = mcc.lambda;
+            g.poisson = mcc.poisson;
+            g.bulk = mcc.reference.bulk;
+            g.shear = mcc.reference.shear;
+            if let Some((lo, hi)) = mcc.safeguards.moduli_clamp {
+                g.clamp = 1;
+                g.clamp_lo = lo;
+                g.clamp_hi = hi;
+            }
+            g.pc_floor = mcc.safeguards.pc_floor;
+        }
+    }
+    g
+}
+
+fn rheology_error(code: u32) -> RheologyError {
+    match code {
+        1 => RheologyError::NonFinite { model: "elastic", stage: "trial stress" },
+        2 => RheologyError::NonFinite { model: "drucker-prager", stage: "trial stress" },
+        3 => RheologyError::NonFinite { model: "mcc", stage: "trial state" },
+        4 => RheologyError::InvalidState { model: "mcc", what: "p_c must be positive" },
+        5 => RheologyError::InvalidState {
+            model: "mcc",
+            what: "elastic moduli must be positive for a plastic correction",
+        },
+        6 => RheologyError::NoConvergence { model: "mcc", stage: "return mapping" },
+        _ => RheologyError::NonFinite { model: "mcc", stage: "return mapping" },
+    }
+}
+
+impl GpuSph {
+    /// Builds the solver on the caller's device. `domain` bounds everything that can take part,
+    /// as for the CPU backend; `adapter` names the device for reports.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        adapter: &str,
+        cfg: SolverConfig,
+        materials: Vec<Material<f32>>,
+        particles: &[ParticleInit],
+        markers: &[MarkerInit],
+        domain: ([f64; 3], [f64; 3]),
+    ) -> Result<Self, GpuError> {
+        if materials.is_empty() {
+            return Err(GpuError::Setup("no materials".into()));
+        }
+        if let Some(p) = particles.iter().find(|p| p.material as usize >= materials.len()) {
+            return Err(GpuError::Setup(format!("particle material index {} out of range", p.material)));
+        }
+        if let Some(p) = particles.iter().find(|p| !(p.rho > 0.0 && p.mass > 0.0)) {
+            return Err(GpuError::Setup(format!("particle at {:?} has non-positive density or mass", p.pos)));
+        }
+        let h = cfg.h();
+        let grid = GridSpec::covering(domain.0, domain.1, h);
+        let n = particles.len();
+        let nm = markers.len();
+        let n_cells = grid.cells();
+        let limits = device.limits();
+        let check = |what: &str, bytes: u64| -> Result<(), GpuError> {
+            let allowed = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+            if bytes > allowed {
+                return Err(GpuError::Limit {
+                    what: what.into(),
+                    needed: bytes,
+                    allowed,
+                    limit: "max_storage_buffer_binding_size",
+                });
+            }
+            Ok(())
+        };
+        let sz = |count: usize, each: usize| (count.max(1) * each) as u64;
+        check("the particle buffer", sz(n, size_of::<Particle>()))?;
+        check("the rate buffer", sz(n, size_of::<Rate>()))?;
+        check("the cell table", sz(n_cells + 2, 4))?;
+        check("the marker buffer", sz(nm, size_of::<Packed>()))?;
+        let max_groups = u64::from(limits.max_compute_workgroups_per_dimension);
+        let need_groups = (n.max(nm).max(n_cells + 1) as u64).div_ceil(64);
+        if need_groups > max_groups {
+            return Err(GpuError::Limit {
+                what: "one thread per particle, marker or cell".into(),
+                needed: need_groups,
+                allowed: max_groups,
+                limit: "max_compute_workgroups_per_dimension",
+            });
+        }
+        if n_cells as u64 + 2 > u64::from(u32::MAX) {
+            return Err(GpuError::Setup(format!("{n_cells} grid cells is too many for u32 indices")));
+        }
+
+        let ref_rho = materials.iter().map(|m| m.density as f64).fold(0.0, f64::max);
+        let ref_cs = materials.iter().map(|m| m.wave_speed() as f64).fold(0.0, f64::max);
+        let alpha = match cfg.kernel {
+            KernelKind::Wendland => <WendlandC2 as Kernel<f32>>::alpha(h as f32),
+            KernelKind::Cubic => <CubicSpline as Kernel<f32>>::alpha(h as f32),
+        };
+        let radius = (2.0 * h) as f32;
+        let (cfl, dt_max, dt_fixed) = match cfg.time_step {
+            TimeStep::Fixed(dt) => (0.0, dt as f32, dt as f32),
+            TimeStep::Adaptive { cfl, max } => (cfl as f32, max as f32, max as f32),
+        };
+        let params = Params {
+            origin: grid.origin.map(|x| x as f32),
+            inv_cell: 1.0 / grid.cell as f32,
+            dims: grid.dims.map(|d| d as u32),
+            n_cells: n_cells as u32,
+            n: n as u32,
+            nm: nm as u32,
+            reach: ((2.0 * h / grid.cell - 1e-9).ceil().max(1.0)) as u32,
+            radius2: radius * radius,
+            h: h as f32,
+            inv_h: (1.0 / h) as f32,
+            alpha,
+            support2: (4.0 * h * h) as f32,
+            visc_alpha: cfg.artificial_viscosity as f32,
+            eta2: (0.01 * h * h) as f32,
+            m_volume: cfg.spacing.powi(3) as f32,
+            ref_rho: ref_rho as f32,
+            gravity: cfg.gravity.map(|g| g as f32),
+            ref_cs: ref_cs as f32,
+            xsph_eps: if cfg.shifting.xsph() { cfg.xsph_epsilon as f32 } else { 0.0 },
+            shift: if cfg.shifting.ppst() { (cfg.shifting_coefficient * h) as f32 } else { 0.0 },
+            max_shift: (0.2 * cfg.spacing) as f32,
+            fs_threshold: cfg.free_surface_threshold.unwrap_or(0.0) as f32,
+            detach_threshold: DETACHED_THRESHOLD as f32,
+            cfl,
+            dt_max,
+            dt_fixed,
+        };
+        let effects = Effects::resolve(&cfg, &materials);
+
+        let k = Kernels {
+            sort_soil: Sort::new(device, &effects, (size_of::<Particle>() / 4) as u32, "sort[soil]")?,
+            sort_markers: Sort::new(device, &effects, (size_of::<Marker>() / 4) as u32, "sort[markers]")?,
+            scan: Scan::new(device, &effects, n_cells as u32 + 1)?,
+            permute: Permute::new(device, &effects)?,
+            pack: Pack::new(device, &effects)?,
+            extrapolate: Extrapolate::new(device, &effects)?,
+            rates: Rates::new(device, &effects)?,
+            forces: Forces::new(device, &effects)?,
+            info: StepInfo::new(device, &effects)?,
+            advance: Advance::new(device, &effects)?,
+        };
+        let mut variants = vec![
+            "sort[soil]".to_string(),
+            "sort[markers]".into(),
+            "scan".into(),
+            "permute".into(),
+            "pack".into(),
+            "extrapolate".into(),
+            "soil_rates[fs]".into(),
+            "soil_rates".into(),
+            "marker_forces".into(),
+            "step_info".into(),
+        ];
+        let rheo: Vec<&str> =
+            [(effects.dp, "dp"), (effects.mcc, "mcc")].iter().filter(|(on, _)| *on).map(|(_, s)| *s).collect();
+        let rheo = if rheo.is_empty() { "elastic".to_string() } else { rheo.join("+") };
+        if effects.rk2 {
+            variants.push(format!("advance[stage,{rheo}]"));
+        }
+        variants.push(format!("advance[{rheo}]"));
+
+        let init_parts: Vec<Particle> = particles
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Particle {
+                pos: p.pos.map(|x| x as f32),
+                vel: p.vel.map(|x| x as f32),
+                rho: p.rho as f32,
+                sigma: p.sigma.map(|x| x as f32),
+                pc: p.pc as f32,
+                sv: p.specific_volume as f32,
+                mass: p.mass as f32,
+                material: u32::from(p.material),
+                id: i as u32,
+                flags: 0,
+                pad: 0,
+            })
+            .collect();
+        let m_host: Vec<Marker> = markers
+            .iter()
+            .map(|m| Marker { pos: m.pos.map(|x| x as f32), owner: m.owner, ..Marker::zeroed() })
+            .collect();
+        let first_body_marker = markers.iter().position(|m| m.owner > 0).unwrap_or(nm);
+        if markers[first_body_marker..].iter().any(|m| m.owner == 0) {
+            return Err(GpuError::Setup("wall markers must come before every body marker".into()));
+        }
+
+        let mk = |label: &str, bytes: u64, usage: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(16).next_multiple_of(4),
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let read = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
+        let b = Buffers {
+            params: mk(
+                "params",
+                size_of::<Params>() as u64,
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            ),
+            materials: mk("materials", sz(materials.len(), size_of::<layout::Material>()), USAGE),
+            parts: mk("particles", sz(n, size_of::<Particle>()), USAGE),
+            tmp: mk("particles.tmp", sz(n, size_of::<Particle>()), USAGE),
+            stage: mk("particles.stage", sz(n, size_of::<Particle>()), USAGE),
+            packed: mk("packed", sz(n, size_of::<Packed>()), USAGE),
+            moduli: mk("moduli", sz(n, 8), USAGE),
+            rates: mk("rates", sz(n, size_of::<Rate>()), USAGE),
+            info: mk("info", size_of::<Info>() as u64, USAGE),
+            cell_of: mk("cell_of", sz(n, 4), USAGE),
+            counts: mk("counts", sz(n_cells + 1, 4), USAGE),
+            start: mk("start", sz(n_cells + 2, 4), USAGE),
+            sums: mk("sums", sz((n_cells + 1).div_ceil(512), 4), USAGE),
+            order: mk("order", sz(n, 4), USAGE),
+            markers: mk("markers", sz(nm, size_of::<Marker>()), USAGE),
+            m_sorted: mk("markers.sorted", sz(nm, size_of::<Marker>()), USAGE),
+            m_limit: mk("markers.count", 4, USAGE),
+            m_cell_of: mk("markers.cell_of", sz(nm, 4), USAGE),
+            m_counts: mk("markers.counts", sz(n_cells + 1, 4), USAGE),
+            m_start: mk("markers.start", sz(n_cells + 2, 4), USAGE),
+            m_sums: mk("markers.sums", sz((n_cells + 1).div_ceil(512), 4), USAGE),
+            m_order: mk("markers.order", sz(nm, 4), USAGE),
+            m_packed: mk("markers.packed", sz(nm, size_of::<Packed>()), USAGE),
+            m_force: mk("markers.force", sz(nm, 12), USAGE),
+            info_read: mk("info.read", size_of::<Info>() as u64, read),
+            force_read: mk("force.read", sz(nm - first_body_marker, 12), read),
+            parts_read: mk("particles.read", sz(n, size_of::<Particle>()), read),
+            rates_read: mk("rates.read", sz(n, size_of::<Rate>()), read),
+        };
+        let gpu_mats: Vec<layout::Material> = materials.iter().map(gpu_material).collect();
+        queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&params));
+        queue.write_buffer(&b.materials, 0, bytemuck::cast_slice(&gpu_mats));
+        if n > 0 {
+            queue.write_buffer(&b.parts, 0, bytemuck::cast_slice(&init_parts));
+        }
+        if nm > 0 {
+            queue.write_buffer(&b.markers, 0, bytemuck::cast_slice(&m_host));
+        }
+        queue.write_buffer(&b.m_limit, 0, bytemuck::bytes_of(&(nm as u32)));
+        let info0 = Info { active: n as u32, max_dt: f32::MAX, ..Info::zeroed() };
+        queue.write_buffer(&b.info, 0, bytemuck::bytes_of(&info0));
+
+        let g = Groups {
+            sort_soil: bind(
+                device,
+                "sort[soil]",
+                &k.sort_soil.layout,
+                &[
+                    (0, &b.params),
+                    (1, &b.parts),
+                    (2, &b.info),
+                    (3, &b.cell_of),
+                    (4, &b.counts),
+                    (5, &b.start),
+                    (6, &b.order),
+                ],
+            ),
+            sort_markers: bind(
+                device,
+                "sort[markers]",
+                &k.sort_markers.layout,
+                &[
+                    (0, &b.params),
+                    (1, &b.markers),
+                    (2, &b.m_limit),
+                    (3, &b.m_cell_of),
+                    (4, &b.m_counts),
+                    (5, &b.m_start),
+                    (6, &b.m_order),
+                ],
+            ),
+            scan_soil: bind(
+                device,
+                "scan[soil]",
+                &k.scan.layout,
+                &[(0, &b.params), (1, &b.counts), (2, &b.start), (3, &b.sums)],
+            ),
+            scan_markers: bind(
+                device,
+                "scan[markers]",
+                &k.scan.layout,
+                &[(0, &b.params), (1, &b.m_counts), (2, &b.m_start), (3, &b.m_sums)],
+            ),
+            permute: bind(
+                device,
+                "permute_particles",
+                &k.permute.particles_layout,
+                &[(0, &b.params), (1, &b.order), (2, &b.start), (3, &b.parts), (4, &b.tmp)],
+            ),
+            set_active: bind(
+                device,
+                "set_active",
+                &k.permute.active_layout,
+                &[(0, &b.params), (2, &b.start), (5, &b.info)],
+            ),
+            gather: bind(
+                device,
+                "gather_markers",
+                &k.permute.markers_layout,
+                &[(0, &b.params), (1, &b.m_order), (2, &b.m_start), (6, &b.markers), (7, &b.m_sorted)],
+            ),
+            pack: [&b.parts, &b.stage].map(|p| {
+                bind(
+                    device,
+                    "pack",
+                    &k.pack.layout,
+                    &[(0, &b.params), (1, p), (2, &b.materials), (3, &b.packed), (4, &b.moduli), (5, &b.info)],
+                )
+            }),
+            extrapolate: [&b.parts, &b.stage].map(|p| {
+                bind(
+                    device,
+                    "extrapolate",
+                    &k.extrapolate.layout,
+                    &[
+                        (0, &b.params),
+                        (1, &b.m_sorted),
+                        (2, &b.m_start),
+                        (3, &b.packed),
+                        (4, p),
+                        (5, &b.start),
+                        (6, &b.m_packed),
+                    ],
+                )
+            }),
+            rates: [&b.parts, &b.stage].map(|p| {
+                bind(
+                    device,
+                    "soil_rates",
+                    &k.rates.layout,
+                    &[
+                        (0, &b.params),
+                        (1, &b.packed),
+                        (2, &b.start),
+                        (3, &b.m_packed),
+                        (4, &b.m_start),
+                        (5, &b.moduli),
+                        (6, p),
+                        (7, &b.rates),
+                        (8, &b.info),
+                    ],
+                )
+            }),
+            forces: bind(
+                device,
+                "marker_forces",
+                &k.forces.layout,
+                &[
+                    (0, &b.params),
+                    (1, &b.m_packed),
+                    (2, &b.m_start),
+                    (3, &b.m_order),
+                    (4, &b.packed),
+                    (5, &b.start),
+                    (6, &b.m_force),
+                ],
+            ),
+            info: bind(
+                device,
+                "step_info",
+                &k.info.layout,
+                &[(0, &b.params), (1, &b.parts), (2, &b.rates), (3, &b.info)],
+            ),
+            advance: bind(
+                device,
+                "advance",
+                &k.advance.layout,
+                &[(0, &b.params), (1, &b.parts), (2, &b.stage), (3, &b.rates), (4, &b.materials), (5, &b.info)],
+            ),
+        };
+        let mut s = Self {
+            device: device.clone(),
+            queue: queue.clone(),
+            adapter: adapter.to_string(),
+            cfg,
+            materials,
+            effects,
+            variants,
+            grid,
+            n,
+            nm,
+            n_cells,
+            k,
+            b,
+            g,
+            active: n,
+            time: 0.0,
+            steps: 0,
+            markers_dirty: true,
+            first_body_marker,
+            m_pos: m_host.iter().map(|m| Vec3::of(m.pos.map(f64::from))).collect(),
+            m_host,
+            m_force: vec![Vec3::zero(); nm],
+            mirror: Mirror::default(),
+        };
+        s.sync().map_err(|e| GpuError::Device(e.to_string()))?;
+        Ok(s)
+    }
+
+    /// The effects the kernels were specialised for.
+    pub fn effects(&self) -> &Effects {
+        &self.effects
+    }
+
+    /// The neighbour grid.
+    pub fn grid(&self) -> &GridSpec {
+        &self.grid
+    }
+
+    /// Free-surface flags of the last step (host copy, after `sync`).
+    pub fn free_surface(&self) -> Vec<bool> {
+        self.mirror.flags.iter().map(|f| f & layout::FLAG_FREE != 0).collect()
+    }
+
+    /// Detached flags of the last step (host copy, after `sync`).
+    pub fn detached(&self) -> Vec<bool> {
+        self.mirror.flags.iter().map(|f| f & layout::FLAG_DETACHED != 0).collect()
+    }
+
+    /// Accelerations of the last stage (host copy, after `sync`).
+    pub fn accelerations(&self) -> &[Vec3<f32>] {
+        &self.mirror.acc[..self.active]
+    }
+
+    /// Free-surface measure of the last first stage (host copy, after `sync`).
+    pub fn free_surface_measure(&self) -> &[f32] {
+        &self.mirror.fs[..self.active]
+    }
+
+    fn record_sort(&self, enc: &mut wgpu::CommandEncoder) {
+        let (k, b, g) = (&self.k, &self.b, &self.g);
+        enc.clear_buffer(&b.counts, 0, None);
+        dispatch(enc, &k.sort_soil.bin, &g.sort_soil, groups(self.n));
+        k.scan.record(enc, &g.scan_soil);
+        enc.clear_buffer(&b.counts, 0, None);
+        dispatch(enc, &k.sort_soil.scatter, &g.sort_soil, groups(self.n));
+        dispatch(enc, &k.sort_soil.order_bins, &g.sort_soil, groups(self.n_cells + 1));
+        dispatch(enc, &k.permute.permute_particles, &g.permute, groups(self.n));
+        if self.n > 0 {
+            enc.copy_buffer_to_buffer(&b.tmp, 0, &b.parts, 0, Some((self.n * size_of::<Particle>()) as u64));
+        }
+        dispatch(enc, &k.permute.set_active, &g.set_active, 1);
+        if self.markers_dirty {
+            enc.clear_buffer(&b.m_counts, 0, None);
+            dispatch(enc, &k.sort_markers.bin, &g.sort_markers, groups(self.nm));
+            k.scan.record(enc, &g.scan_markers);
+            enc.clear_buffer(&b.m_counts, 0, None);
+            dispatch(enc, &k.sort_markers.scatter, &g.sort_markers, groups(self.nm));
+            dispatch(enc, &k.sort_markers.order_bins, &g.sort_markers, groups(self.n_cells + 1));
+            dispatch(enc, &k.permute.gather_markers, &g.gather, groups(self.nm));
+        }
+    }
+
+    /// Pack, extrapolate and rates from the current (`0`) or midpoint (`1`) state.
+    fn record_evaluate(&self, enc: &mut wgpu::CommandEncoder, from: usize, forces: bool) {
+        let (k, g) = (&self.k, &self.g);
+        dispatch(enc, &k.pack.pack, &g.pack[from], groups(self.n));
+        dispatch(enc, &k.extrapolate.extrapolate, &g.extrapolate[from], groups(self.nm));
+        let rates = if from == 0 { &k.rates.first } else { &k.rates.second };
+        dispatch(enc, rates, &g.rates[from], groups(self.n));
+        if forces {
+            enc.clear_buffer(&self.b.m_force, 0, None);
+            dispatch(enc, &k.forces.marker_forces, &g.forces, groups(self.nm));
+        }
+    }
+
+    /// Copies `src` into a mappable buffer, waits, and hands the bytes to `f`.
+    fn read_back<R>(
+        &self,
+        src: &wgpu::Buffer,
+        dst: &wgpu::Buffer,
+        bytes: u64,
+        f: impl FnOnce(&[u8]) -> R,
+    ) -> Result<R, GpuError> {
+        let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read") });
+        enc.copy_buffer_to_buffer(src, 0, dst, 0, Some(bytes));
+        self.queue.submit([enc.finish()]);
+        self.map(dst, bytes, f)
+    }
+
+    fn map<R>(&self, dst: &wgpu::Buffer, bytes: u64, f: impl FnOnce(&[u8]) -> R) -> Result<R, GpuError> {
+        let (tx, rx) = mpsc::channel();
+        dst.map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Device(e.to_string()))?;
+        rx.recv().map_err(|e| GpuError::Device(e.to_string()))?.map_err(|e| GpuError::Device(e.to_string()))?;
+        let out = {
+            let view = dst.get_mapped_range(0..bytes).map_err(|e| GpuError::Device(e.to_string()))?;
+            f(&view)
+        };
+        dst.unmap();
+        Ok(out)
+    }
+
+    fn step_gpu(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
+        let dev = |e: GpuError| SolverError::Setup(format!("wgpu: {e}"));
+        let limit = max_dt.map_or(f32::MAX, |m| m as f32);
+        self.queue.write_buffer(&self.b.info, 8, bytemuck::bytes_of(&limit));
+        let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("step") });
+        let rk2 = self.effects.rk2;
+        dispatch(&mut enc, &self.k.info.reset, &self.g.info, 1);
+        self.record_sort(&mut enc);
+        self.markers_dirty = false;
+        self.record_evaluate(&mut enc, 0, !rk2);
+        dispatch(&mut enc, &self.k.info.maxima, &self.g.info, groups(self.n));
+        dispatch(&mut enc, &self.k.info.choose_dt, &self.g.info, 1);
+        if let (true, Some(stage)) = (rk2, &self.k.advance.stage) {
+            dispatch(&mut enc, stage, &self.g.advance, groups(self.n));
+            self.record_evaluate(&mut enc, 1, true);
+        }
+        dispatch(&mut enc, &self.k.advance.finish, &self.g.advance, groups(self.n));
+        enc.copy_buffer_to_buffer(&self.b.info, 0, &self.b.info_read, 0, Some(size_of::<Info>() as u64));
+        let nb = self.nm - self.first_body_marker;
+        if nb > 0 {
+            enc.copy_buffer_to_buffer(
+                &self.b.m_force,
+                (self.first_body_marker * 12) as u64,
+                &self.b.force_read,
+                0,
+                Some((nb * 12) as u64),
+            );
+        }
+        self.queue.submit([enc.finish()]);
+        let info: Info =
+            self.map(&self.b.info_read, size_of::<Info>() as u64, |b| *bytemuck::from_bytes(b)).map_err(dev)?;
+        if nb > 0 {
+            let first = self.first_body_marker;
+            let forces: Vec<[f32; 3]> =
+                self.map(&self.b.force_read, (nb * 12) as u64, |b| bytemuck::cast_slice(b).to_vec()).map_err(dev)?;
+            for (dst, f) in self.m_force[first..].iter_mut().zip(forces) {
+                *dst = Vec3::new(f[0], f[1], f[2]);
+            }
+        }
+        // The device step is f32: one that stopped at the host's limit is that limit exactly,
+        // so the caller lands on its exchange or end time without a round-off sliver.
+        let dt = match max_dt {
+            Some(m) if info.dt == m as f32 => m,
+            _ => f64::from(info.dt),
+        };
+        let time = self.time + dt;
+        self.active = info.active as usize;
+        if info.err_code != 0 {
+            let (step, particle) = (self.steps, info.err_id);
+            return Err(match info.err_code {
+                8 => SolverError::NonFinite { step, time, particle, what: "position" },
+                9 => SolverError::NonFinite { step, time, particle, what: "velocity" },
+                10 => SolverError::NonFinite { step, time, particle, what: "density" },
+                c => SolverError::Rheology { step, time, particle, source: rheology_error(c) },
+            });
+        }
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(SolverError::Setup(format!("time step {dt} s is not positive")));
+        }
+        self.time = time;
+        self.steps += 1;
+        Ok(StepReport {
+            dt,
+            max_speed: f64::from(f32::from_bits(info.vmax_end)),
+            max_accel: f64::from(f32::from_bits(info.amax_end)),
+            active: self.active,
+            pairs: info.pairs as usize,
+        })
+    }
+
+    fn sync_gpu(&mut self) -> Result<(), GpuError> {
+        let n = self.n;
+        let parts: Vec<Particle> =
+            self.read_back(&self.b.parts, &self.b.parts_read, (n.max(1) * size_of::<Particle>()) as u64, |b| {
+                bytemuck::cast_slice::<u8, Particle>(b).to_vec()
+            })?;
+        let rates: Vec<Rate> =
+            self.read_back(&self.b.rates, &self.b.rates_read, (n.max(1) * size_of::<Rate>()) as u64, |b| {
+                bytemuck::cast_slice::<u8, Rate>(b).to_vec()
+            })?;
+        let m = &mut self.mirror;
+        let parts = &parts[..n];
+        let v3 = |a: [f32; 3]| Vec3::new(a[0], a[1], a[2]);
+        m.pos = parts.iter().map(|p| v3(p.pos)).collect();
+        m.vel = parts.iter().map(|p| v3(p.vel)).collect();
+        m.rho = parts.iter().map(|p| p.rho).collect();
+        m.sigma = parts
+            .iter()
+            .map(|p| Sym3::new(p.sigma[0], p.sigma[1], p.sigma[2], p.sigma[3], p.sigma[4], p.sigma[5]))
+            .collect();
+        m.state = parts.iter().map(|p| PointState { pc: p.pc, v: p.sv }).collect();
+        m.material = parts.iter().map(|p| p.material as u16).collect();
+        m.mass = parts.iter().map(|p| p.mass).collect();
+        m.id = parts.iter().map(|p| p.id).collect();
+        m.flags = parts.iter().map(|p| p.flags).collect();
+        m.acc = rates[..n].iter().map(|r| v3(r.acc)).collect();
+        m.fs = rates[..n].iter().map(|r| r.fs).collect();
+        Ok(())
+    }
+}
+
+impl SphSolver<f32> for GpuSph {
+    fn backend(&self) -> &'static str {
+        "wgpu"
+    }
+    fn adapter(&self) -> String {
+        self.adapter.clone()
+    }
+    fn config(&self) -> &SolverConfig {
+        &self.cfg
+    }
+    fn materials(&self) -> &[Material<f32>] {
+        &self.materials
+    }
+    fn time(&self) -> f64 {
+        self.time
+    }
+    fn steps(&self) -> u64 {
+        self.steps
+    }
+    fn len(&self) -> usize {
+        self.n
+    }
+    fn active(&self) -> usize {
+        self.active
+    }
+    fn step(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
+        self.step_gpu(max_dt)
+    }
+    fn sync(&mut self) -> Result<(), SolverError> {
+        self.sync_gpu().map_err(|e| SolverError::Setup(format!("wgpu: {e}")))
+    }
+    fn positions(&self) -> &[Vec3<f32>] {
+        &self.mirror.pos
+    }
+    fn velocities(&self) -> &[Vec3<f32>] {
+        &self.mirror.vel
+    }
+    fn densities(&self) -> &[f32] {
+        &self.mirror.rho
+    }
+    fn stresses(&self) -> &[Sym3<f32>] {
+        &self.mirror.sigma
+    }
+    fn states(&self) -> &[PointState<f32>] {
+        &self.mirror.state
+    }
+    fn material_ids(&self) -> &[u16] {
+        &self.mirror.material
+    }
+    fn masses(&self) -> &[f32] {
+        &self.mirror.mass
+    }
+    fn ids(&self) -> &[u32] {
+        &self.mirror.id
+    }
+    fn marker_positions(&self) -> &[Vec3<f32>] {
+        &self.m_pos
+    }
+    fn marker_forces(&self) -> &[Vec3<f32>] {
+        &self.m_force
+    }
+    fn set_marker_kinematics(&mut self, first: usize, pos: &[Vec3<f32>], vel: &[Vec3<f32>], acc: &[Vec3<f32>]) {
+        for (i, ((p, v), a)) in pos.iter().zip(vel).zip(acc).enumerate() {
+            let m = &mut self.m_host[first + i];
+            m.pos = [p.x, p.y, p.z];
+            m.vel = [v.x, v.y, v.z];
+            m.acc = [a.x, a.y, a.z];
+            self.m_pos[first + i] = *p;
+        }
+        let end = first + pos.len();
+        if end > first {
+            self.queue.write_buffer(
+                &self.b.markers,
+                (first * size_of::<Marker>()) as u64,
+                bytemuck::cast_slice(&self.m_host[first..end]),
+            );
+        }
+        self.markers_dirty = true;
+    }
+    fn variants(&self) -> Vec<String> {
+        self.variants.clone()
+    }
+    fn as_cpu(&self) -> Option<&regolith_fsi::cpu::CpuSph<f32>> {
+        None
+    }
+}

@@ -1,0 +1,373 @@
+//! The wgpu backend against its CPU twin (f32), on Mesa's lavapipe in CI.
+//!
+//! - Kernels: one step from a disordered, moving, stressed state (Drucker–Prager and Modified
+//!   Cam Clay soil, walls and a moving body) on both backends; every stage's output compared.
+//!   Both visit neighbours in the same order (cell-sorted records, columns x then y, each a
+//!   contiguous z range), so sums round alike and differences come only from the device's
+//!   transcendental functions and fused multiply-adds: 1e-5 of each field's largest magnitude.
+//! - Variants: a Drucker–Prager-only scene does not compile the MCC return mapping.
+//! - Whole scenes over the same time: geostatic box (stresses within 1 %), column collapse
+//!   (runout within 2 %), plate sinkage (force–sinkage curve within 3 %).
+
+mod common;
+
+use rand::{Rng, SeedableRng};
+use regolith::gpu::device;
+use regolith::run::{RunOptions, run_scene, scene_terrain};
+use regolith::scene::{Backend, Precision, Scene};
+use regolith_fsi::config::TimeStep;
+use regolith_fsi::cpu::CpuSph;
+use regolith_fsi::math::Vec3;
+use regolith_fsi::{MarkerInit, SphSolver};
+use regolith_wgpu::GpuSph;
+
+const MIXED: &str = r#"
+[simulation]
+end_time = 0.01
+precision = "f32"
+[sph]
+spacing = 0.02
+shifting = "ppst+xsph"
+[[materials]]
+name = "clay"
+model = "mcc"
+density = 1800
+youngs_modulus = 2.0e7
+poisson_ratio = 0.3
+mcc_m = 1.2
+mcc_kappa = 0.02
+mcc_lambda = 0.1
+mcc_v_lambda = 2.4
+ocr = 1.2
+[[materials]]
+name = "sand"
+model = "drucker-prager"
+density = 1600
+youngs_modulus = 1e7
+poisson_ratio = 0.3
+friction_angle = 30.0
+[container]
+min = [0.0, 0.0, 0.0]
+max = [0.24, 0.2, 0.3]
+[[soil_blocks]]
+material = "clay"
+shape = "box"
+min = [0.0, 0.0, 0.0]
+max = [0.12, 0.2, 0.16]
+[[soil_blocks]]
+material = "sand"
+shape = "box"
+min = [0.12, 0.0, 0.0]
+max = [0.24, 0.2, 0.12]
+"#;
+
+struct Pair {
+    cpu: CpuSph<f32>,
+    gpu: GpuSph,
+}
+
+/// Both backends from one disordered, moving, stressed state with a moving body's markers.
+fn pair(text: &str, seed: u64) -> Pair {
+    let scene = common::scene(text);
+    let (mats, mut terrain) = scene_terrain::<f32>(&scene).expect("terrain");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let d0 = scene.solver.spacing;
+    for p in &mut terrain.particles {
+        for a in 0..3 {
+            p.pos[a] += (rng.random::<f64>() - 0.5) * 0.3 * d0;
+            p.vel[a] = (rng.random::<f64>() - 0.5) * 0.2;
+        }
+        // Deviatoric kicks big enough to send part of the soil through its return mapping.
+        let p0 = -(p.sigma[0] + p.sigma[1] + p.sigma[2]) / 3.0;
+        for k in 0..6 {
+            p.sigma[k] += (rng.random::<f64>() - 0.5) * 1.5 * p0.max(200.0);
+        }
+    }
+    // A body: a slab of markers sitting in the surface, moving and accelerating.
+    let mut markers = terrain.markers.clone();
+    let first_body = markers.len();
+    for i in 0..6 {
+        for j in 0..6 {
+            markers.push(MarkerInit { pos: [0.07 + d0 * i as f64, 0.05 + d0 * j as f64, 0.165], owner: 1 });
+        }
+    }
+    let mut cfg = scene.solver;
+    cfg.time_step = TimeStep::Fixed(5e-5);
+    let d = device().expect("a wgpu adapter (lavapipe in CI)");
+    let mut cpu = CpuSph::new(cfg, mats.clone(), &terrain.particles, &markers, terrain.domain).expect("cpu");
+    let mut gpu = GpuSph::new(&d.device, &d.queue, &d.name, cfg, mats, &terrain.particles, &markers, terrain.domain)
+        .expect("gpu");
+    let nb = markers.len() - first_body;
+    let pos: Vec<Vec3<f32>> = markers[first_body..].iter().map(|m| Vec3::of(m.pos)).collect();
+    let vel = vec![Vec3::new(0.05f32, 0.0, -0.1); nb];
+    let acc = vec![Vec3::new(0.0f32, 0.0, 2.0); nb];
+    SphSolver::set_marker_kinematics(&mut cpu, first_body, &pos, &vel, &acc);
+    gpu.set_marker_kinematics(first_body, &pos, &vel, &acc);
+    Pair { cpu, gpu }
+}
+
+/// Largest |a − b| over the largest |a|, per component.
+fn rel_err(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let scale = a.iter().flat_map(|v| v.iter()).fold(0.0f64, |m, x| m.max(x.abs())).max(1e-30);
+    a.iter().zip(b).flat_map(|(x, y)| (0..3).map(move |k| (x[k] - y[k]).abs())).fold(0.0, f64::max) / scale
+}
+
+fn v3<T: regolith_fsi::Real>(v: &[Vec3<T>]) -> Vec<[f64; 3]> {
+    v.iter().map(|x| x.as_f64()).collect()
+}
+
+#[test]
+fn every_kernel_matches_its_cpu_twin_on_random_input() {
+    let Pair { mut cpu, mut gpu } = pair(MIXED, 11);
+    let pc0: Vec<f32> = cpu.states().iter().map(|s| s.pc).collect();
+    for step in 0..3 {
+        let rc = cpu.step(None).expect("cpu step");
+        let rg = gpu.step(None).expect("gpu step");
+        gpu.sync().expect("sync");
+        // Cell sort (bin, scan, scatter, order_bins, permute): the same order exactly.
+        assert_eq!(cpu.active(), gpu.active());
+        assert_eq!(cpu.ids(), SphSolver::ids(&gpu), "step {step}: cell order");
+        // Pair counts of the neighbour loops and the time step.
+        assert_eq!(rc.pairs, rg.pairs, "step {step}: pairs");
+        assert!((rc.dt - rg.dt).abs() <= 1e-6 * rc.dt, "dt {} vs {}", rc.dt, rg.dt);
+        // Rates (pack, extrapolate, soil_rates): accelerations and the free-surface measure.
+        let e_acc = rel_err(&v3(&cpu.accelerations()), &v3(gpu.accelerations()));
+        assert!(e_acc < 1e-5, "step {step}: accelerations differ by {e_acc:e}");
+        let fs_c: Vec<[f64; 3]> = cpu.free_surface_measure().iter().map(|&x| [f64::from(x), 0.0, 0.0]).collect();
+        let fs_g: Vec<[f64; 3]> = gpu.free_surface_measure().iter().map(|&x| [f64::from(x), 0.0, 0.0]).collect();
+        let e_fs = rel_err(&fs_c, &fs_g);
+        assert!(e_fs < 1e-5, "step {step}: free-surface measure differs by {e_fs:e}");
+        let flags_c: Vec<(bool, bool)> =
+            cpu.free_surface().iter().copied().zip(cpu.detached().iter().copied()).collect();
+        let flags_g: Vec<(bool, bool)> = gpu.free_surface().into_iter().zip(gpu.detached()).collect();
+        let flips = flags_c.iter().zip(&flags_g).filter(|(a, b)| a != b).count();
+        assert!(flips <= flags_c.len() / 1000, "step {step}: {flips} surface flags differ");
+        // Advance (integration, shifting, both return mappings).
+        let n = cpu.active();
+        for (name, a, b) in [
+            ("positions", v3(cpu.positions()), v3(SphSolver::positions(&gpu))),
+            ("velocities", v3(cpu.velocities()), v3(SphSolver::velocities(&gpu))),
+        ] {
+            // Positions relative to their motion over the step, not to the box size.
+            let e = if name == "positions" {
+                let d: Vec<[f64; 3]> = a.iter().zip(&b).map(|(x, y)| [x[0] - y[0], x[1] - y[1], x[2] - y[2]]).collect();
+                d.iter().flat_map(|v| v.iter()).fold(0.0f64, |m, x| m.max(x.abs())) / (0.2 * rc.dt)
+            } else {
+                rel_err(&a[..n], &b[..n])
+            };
+            assert!(e < 1e-5, "step {step}: {name} differ by {e:e}");
+        }
+        let sig = |s: &[regolith_fsi::math::Sym3<f32>]| -> Vec<[f64; 3]> {
+            s.iter().flat_map(|x| [[x.xx, x.yy, x.zz], [x.xy, x.xz, x.yz]]).map(|v| v.map(f64::from)).collect()
+        };
+        let e_sig = rel_err(&sig(cpu.stresses()), &sig(SphSolver::stresses(&gpu)));
+        assert!(e_sig < 1e-5, "step {step}: stresses differ by {e_sig:e}");
+        let st = |s: &[regolith_fsi::rheology::PointState<f32>], rho: &[f32]| -> Vec<[f64; 3]> {
+            s.iter().zip(rho).map(|(x, r)| [f64::from(x.pc), f64::from(x.v), f64::from(*r)]).collect()
+        };
+        let e_st =
+            rel_err(&st(cpu.states(), cpu.densities()), &st(SphSolver::states(&gpu), SphSolver::densities(&gpu)));
+        assert!(e_st < 1e-5, "step {step}: p_c, v or density differ by {e_st:e}");
+        // Marker forces (body markers are read back).
+        let first = cpu.marker_owners().iter().position(|&o| o > 0).expect("body markers");
+        let e_f = rel_err(&v3(&cpu.marker_forces()[first..]), &v3(&SphSolver::marker_forces(&gpu)[first..]));
+        assert!(e_f < 1e-5, "step {step}: marker forces differ by {e_f:e}");
+        eprintln!(
+            "step {step}: relative errors acc {e_acc:.1e}, fs {e_fs:.1e}, sigma {e_sig:.1e}, state {e_st:.1e}, marker force {e_f:.1e}; {flips} flag flips"
+        );
+        if step == 0 {
+            // The kicks sent MCC soil through its return mapping: p_c hardened or softened.
+            let moved = cpu
+                .ids()
+                .iter()
+                .zip(cpu.states())
+                .filter(|(id, s)| pc0[**id as usize] > 0.0 && (s.pc - pc0[**id as usize]).abs() > 1e-4 * s.pc)
+                .count();
+            assert!(moved > 100, "only {moved} particles went plastic");
+            eprintln!("{moved} MCC particles changed p_c in the first step");
+        }
+    }
+}
+
+#[test]
+fn drucker_prager_only_scenes_do_not_compile_mcc() {
+    let dp = MIXED.replace("model = \"mcc\"", "model = \"drucker-prager\"\nfriction_angle = 25.0");
+    let dp = dp.replace("mcc_m = 1.2\nmcc_kappa = 0.02\nmcc_lambda = 0.1\nmcc_v_lambda = 2.4\nocr = 1.2\n", "");
+    let Pair { gpu, .. } = pair(&dp, 3);
+    let v = gpu.variants();
+    assert!(v.iter().any(|s| s.starts_with("advance[") && s.contains("dp")), "{v:?}");
+    assert!(!v.iter().any(|s| s.contains("mcc")), "MCC compiled for a DP-only scene: {v:?}");
+    assert!(!gpu.effects().mcc && gpu.effects().dp);
+    let Pair { gpu, .. } = pair(MIXED, 3);
+    assert!(gpu.variants().iter().any(|s| s.contains("dp+mcc")), "{:?}", gpu.variants());
+}
+
+/// Runs a scene on both backends (f32) and returns their summaries and output dirs.
+fn both(scene: &Scene, name: &str) -> [(regolith::run::Summary, std::path::PathBuf); 2] {
+    [Backend::Cpu, Backend::Wgpu].map(|b| {
+        let mut s = scene.clone();
+        s.backend = b;
+        s.precision = Precision::F32;
+        s.output.mcap = false;
+        let out = common::out_dir(&format!("wgpu_parity_{name}_{b:?}"));
+        let summary = run_scene(&s, &RunOptions { out: out.clone(), quiet: true }).expect("run");
+        assert_eq!(summary.backend, if b == Backend::Cpu { "cpu" } else { "wgpu" });
+        (summary, out)
+    })
+}
+
+fn csv(path: &std::path::Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).expect("csv");
+    let mut lines = text.lines();
+    let head: Vec<String> = lines.next().expect("header").split(',').map(String::from).collect();
+    let rows = lines.map(|l| l.split(',').map(|x| x.parse().unwrap_or(f64::NAN)).collect()).collect();
+    (head, rows)
+}
+
+#[test]
+fn geostatic_box_stresses_agree_within_one_percent() {
+    let scene = common::example(
+        "geostatic_box.toml",
+        &["simulation.end_time=0.03", "simulation.precision=\"f32\"", "sph.spacing=0.04"],
+    );
+    let [(c, cdir), (g, gdir)] = both(&scene, "geostatic");
+    assert_eq!(c.particles, g.particles);
+    // Mean p and q of each layer.
+    let layers = |dir: &std::path::Path| {
+        let (h, rows) = csv(&dir.join("particles_final.csv"));
+        let col = |n: &str| h.iter().position(|x| x == n).expect("column");
+        let (z, p, q) = (col("z"), col("p"), col("q"));
+        let mut m = std::collections::BTreeMap::<i64, (f64, f64, f64)>::new();
+        for r in rows {
+            let e = m.entry((r[z] / 0.04).round() as i64).or_default();
+            e.0 += r[p];
+            e.1 += r[q];
+            e.2 += 1.0;
+        }
+        m
+    };
+    let (a, b) = (layers(&cdir), layers(&gdir));
+    assert!(a.len() >= 8);
+    let pmax = a.values().map(|v| v.0 / v.2).fold(0.0, f64::max);
+    for (k, va) in &a {
+        let vb = b.get(k).expect("same layers");
+        assert_eq!(va.2, vb.2, "layer {k} count");
+        for (x, y, what) in [(va.0 / va.2, vb.0 / vb.2, "p"), (va.1 / va.2, vb.1 / vb.2, "q")] {
+            assert!((x - y).abs() <= 0.01 * pmax, "layer {k}: {what} {x} (cpu) vs {y} (wgpu)");
+        }
+    }
+}
+
+#[test]
+fn column_collapse_runout_agrees_within_two_percent() {
+    let scene = common::example("column_collapse.toml", &["sph.spacing=0.02", "simulation.end_time=0.4"]);
+    let [(c, _), (g, _)] = both(&scene, "column");
+    let (rc, rg) = (c.runout.expect("runout").normalized, g.runout.expect("runout").normalized);
+    assert!(rc > 0.3, "the column spread ({rc})");
+    assert!((rc - rg).abs() <= 0.02 * rc, "runout {rc} (cpu) vs {rg} (wgpu)");
+    assert_eq!(g.escaped_particles, c.escaped_particles);
+}
+
+#[test]
+fn plate_sinkage_force_curve_agrees_within_three_percent() {
+    let scene = common::example(
+        "plate_sinkage.toml",
+        &[
+            "sph.spacing=0.02",
+            "rig.sizes=[0.05]",
+            "rig.depth=0.01",
+            "container.max=[0.3, 0.3, 0.2]",
+            "terrain.depth=0.08",
+        ],
+    );
+    let [(_, cdir), (_, gdir)] = both(&scene, "plate");
+    let force = |dir: &std::path::Path| {
+        let (h, rows) = csv(&dir.join("series.csv"));
+        let (s, p) = (
+            h.iter().position(|x| x == "sinkage").expect("sinkage"),
+            h.iter().position(|x| x == "pressure").expect("pressure"),
+        );
+        rows.into_iter().map(|r| (r[s], r[p])).collect::<Vec<_>>()
+    };
+    let (a, b) = (force(&cdir), force(&gdir));
+    assert_eq!(a.len(), b.len(), "same exchanges");
+    let pmax = a.iter().map(|x| x.1).fold(0.0, f64::max);
+    assert!(pmax > 0.0);
+    // Pressure at each exchange over the last two thirds (past the first contact transient).
+    for (x, y) in a.iter().zip(&b).skip(a.len() / 3) {
+        assert!((x.0 - y.0).abs() < 1e-4, "sinkage {} vs {}", x.0, y.0);
+        assert!((x.1 - y.1).abs() <= 0.03 * pmax, "pressure {} (cpu) vs {} (wgpu) at sinkage {}", x.1, y.1, x.0);
+    }
+}
+
+/// Runs the CLI.
+fn regolith(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_regolith")).args(args).output().expect("runs");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+#[test]
+fn rigs_and_vehicles_run_on_wgpu_from_the_cli() {
+    for (scene, sets) in [
+        ("cone_penetrometer.toml", vec!["--set", "simulation.end_time=0.004"]),
+        ("single_wheel.toml", vec!["--set", "simulation.end_time=0.004", "--slips", "0.3"]),
+        ("rover.toml", vec!["--set", "simulation.end_time=0.004"]),
+    ] {
+        let out = common::out_dir(&format!("wgpu_cli_{scene}"));
+        let path = format!("{}/examples/scenes/{scene}", env!("CARGO_MANIFEST_DIR"));
+        let mut args = vec!["run", &path, "--backend", "wgpu", "--quiet", "--out"];
+        let o = out.to_string_lossy().into_owned();
+        args.push(&o);
+        args.extend(sets.iter().copied());
+        let (code, stdout, stderr) = regolith(&args);
+        assert_eq!(code, 0, "{scene}: {stdout}\n{stderr}");
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+        assert_eq!(s["backend"], "wgpu", "{scene}");
+        assert_ne!(s["adapter"], "cpu", "{scene}");
+        assert_eq!(s["precision"], "f32", "{scene}");
+        assert_eq!(s["nan_detected"], false, "{scene}");
+        assert!(s["steps"].as_u64().expect("steps") > 0, "{scene}");
+        assert!(out.join("series.csv").exists() && out.join("recording.mcap").exists(), "{scene}");
+    }
+}
+
+#[test]
+fn wgpu_with_f64_is_a_one_line_error() {
+    let path = format!("{}/examples/scenes/geostatic_box.toml", env!("CARGO_MANIFEST_DIR"));
+    let (code, _, stderr) = regolith(&["run", &path, "--backend", "wgpu", "--precision", "f64", "--quiet"]);
+    assert_eq!(code, 2, "{stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.contains("XDG_RUNTIME_DIR")).collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(lines[0].contains("--backend") && lines[0].contains("f32"), "{stderr}");
+    // In a scene file: the key is named.
+    let dir = common::out_dir("wgpu_f64_scene");
+    let text = std::fs::read_to_string(&path).expect("scene").replace("backend = \"cpu\"", "backend = \"wgpu\"");
+    let p = dir.join("s.toml");
+    std::fs::write(&p, text).expect("write");
+    let (code, _, stderr) = regolith(&["check", &p.to_string_lossy()]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("simulation.precision") && stderr.contains("f32"), "{stderr}");
+}
+
+#[test]
+fn auto_says_which_backend_it_chose() {
+    let path = format!("{}/examples/scenes/geostatic_box.toml", env!("CARGO_MANIFEST_DIR"));
+    let out = common::out_dir("wgpu_auto");
+    let o = out.to_string_lossy().into_owned();
+    let (code, stdout, stderr) =
+        regolith(&["run", &path, "--backend", "auto", "--set", "simulation.end_time=0.002", "--out", &o]);
+    assert_eq!(code, 0, "{stderr}");
+    let line = stdout.lines().find(|l| l.starts_with("backend auto:")).expect("auto reports its choice");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+    // Lavapipe is a software adapter: auto keeps the CPU unless a real GPU exists.
+    let real = regolith::gpu::real_gpu().is_some();
+    assert_eq!(s["backend"], if real { "wgpu" } else { "cpu" }, "{line}");
+    assert!(line.contains(if real { "wgpu" } else { "cpu" }), "{line}");
+}
