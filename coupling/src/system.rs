@@ -24,9 +24,8 @@ use std::ops::Range;
 
 use regolith_fsi::config::SolverConfig;
 use regolith_fsi::cpu::CpuSph;
-use regolith_fsi::math::Vec3;
 use regolith_fsi::rheology::Material;
-use regolith_fsi::{MarkerInit, ParticleInit, Real, SolverError, SphSolver};
+use regolith_fsi::{BodyKinematics, BodyMarkers, MarkerInit, ParticleInit, Real, SolverError, SphSolver};
 use regolith_rigid::{BodyId, BodyState, Motion, RigidWorld, quat_mul, quat_rotate};
 
 use crate::CouplingError;
@@ -69,9 +68,6 @@ fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
     [a[0] * s, a[1] * s, a[2] * s]
 }
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
 
 /// A body's state advanced by τ at constant linear and angular velocity.
 pub fn extrapolate(s: &BodyState, tau: f64) -> BodyState {
@@ -97,41 +93,35 @@ fn conj(q: [f64; 4]) -> [f64; 4] {
 }
 
 impl FsiInterface {
-    /// Places every FSI body's markers (position, velocity, acceleration) from its state.
-    pub fn place_markers<T: Real>(&self, fluid: &mut dyn SphSolver<T>, states: &[BodyState]) {
-        let (mut pos, mut vel, mut acc) = (Vec::new(), Vec::new(), Vec::new());
-        for (b, s) in self.bodies.iter().zip(states) {
-            pos.clear();
-            vel.clear();
-            acc.clear();
-            for local in &b.local {
-                let x = s.to_world(*local);
-                pos.push(Vec3::of(x));
-                vel.push(Vec3::of(s.velocity_at(x)));
-                acc.push(Vec3::of(s.acceleration_at(x)));
-            }
-            fluid.set_marker_kinematics(b.markers.start, &pos, &vel, &acc);
-        }
+    fn marker_sets(&self) -> Vec<BodyMarkers<'_>> {
+        self.bodies.iter().map(|b| BodyMarkers { first: b.markers.start, local: &b.local }).collect()
     }
 
-    /// The soil's wrench on each body from the current marker forces, torques about `states'`
-    /// centres of mass.
-    pub fn wrenches<T: Real>(&self, fluid: &dyn SphSolver<T>, states: &[BodyState]) -> Vec<Wrench> {
-        let f = fluid.marker_forces();
-        let x = fluid.marker_positions();
-        self.bodies
+    /// Places every FSI body's markers (position, velocity, acceleration) from its state.
+    pub fn place_markers<T: Real>(&self, fluid: &mut dyn SphSolver<T>, states: &[BodyState]) {
+        let kin: Vec<BodyKinematics> = states
             .iter()
-            .zip(states)
-            .map(|(b, s)| {
-                let mut w = Wrench::default();
-                for i in b.markers.clone() {
-                    let fi = f[i].as_f64();
-                    let r = sub(x[i].as_f64(), s.com);
-                    w.force = add(w.force, fi);
-                    w.torque = add(w.torque, cross(r, fi));
-                }
-                w
+            .map(|s| BodyKinematics {
+                origin: s.origin,
+                com: s.com,
+                rotation: s.rotation,
+                linvel: s.linvel,
+                angvel: s.angvel,
+                linacc: s.linacc,
+                angacc: s.angacc,
             })
+            .collect();
+        fluid.place_bodies(&self.marker_sets(), &kin);
+    }
+
+    /// The soil's wrench on each body from the last step's marker forces, torques about
+    /// `states'` centres of mass.
+    pub fn wrenches<T: Real>(&self, fluid: &dyn SphSolver<T>, states: &[BodyState]) -> Vec<Wrench> {
+        let about: Vec<[f64; 3]> = states.iter().map(|s| s.com).collect();
+        fluid
+            .body_wrenches(&self.marker_sets(), &about)
+            .into_iter()
+            .map(|[force, torque]| Wrench { force, torque })
             .collect()
     }
 }

@@ -19,4 +19,4 @@ mod solver;
 
 pub use particles::{MarkerInit, ParticleInit, SolverError, StepReport};
 pub use real::Real;
-pub use solver::SphSolver;
+pub use solver::{BodyKinematics, BodyMarkers, SphSolver, place_on_host};

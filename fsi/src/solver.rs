@@ -12,6 +12,79 @@ use crate::math::{Sym3, Vec3};
 use crate::particles::{SolverError, StepReport};
 use crate::rheology::{Material, PointState};
 
+/// The markers of one body: where they sit in the marker array and their body-frame positions.
+#[derive(Clone, Copy, Debug)]
+pub struct BodyMarkers<'a> {
+    /// First marker (original order).
+    pub first: usize,
+    /// Body-frame positions (m), one per marker from `first` on.
+    pub local: &'a [[f64; 3]],
+}
+
+/// A rigid body's state as the soil needs it (world frame, SI).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BodyKinematics {
+    /// Body-frame origin (m).
+    pub origin: [f64; 3],
+    /// Centre of mass (m).
+    pub com: [f64; 3],
+    /// Orientation, unit quaternion `[x, y, z, w]`.
+    pub rotation: [f64; 4],
+    /// Linear velocity of the centre of mass (m/s).
+    pub linvel: [f64; 3],
+    /// Angular velocity (rad/s).
+    pub angvel: [f64; 3],
+    /// Linear acceleration of the centre of mass (m/s²).
+    pub linacc: [f64; 3],
+    /// Angular acceleration (rad/s²).
+    pub angacc: [f64; 3],
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+impl BodyKinematics {
+    /// A body-frame point in the world, with its velocity and acceleration (rigid motion).
+    pub fn point(&self, local: [f64; 3]) -> [[f64; 3]; 3] {
+        let [qx, qy, qz, qw] = self.rotation;
+        let u = [qx, qy, qz];
+        // v' = v + 2w (u × v) + 2 u × (u × v)
+        let t = cross(u, local).map(|c| 2.0 * c);
+        let ut = cross(u, t);
+        let x: [f64; 3] = std::array::from_fn(|k| self.origin[k] + (local[k] + qw * t[k] + ut[k]));
+        let r: [f64; 3] = std::array::from_fn(|k| x[k] - self.com[k]);
+        let wr = cross(self.angvel, r);
+        let v: [f64; 3] = std::array::from_fn(|k| self.linvel[k] + wr[k]);
+        let ar = cross(self.angacc, r);
+        let wwr = cross(self.angvel, wr);
+        let a: [f64; 3] = std::array::from_fn(|k| self.linacc[k] + ar[k] + wwr[k]);
+        [x, v, a]
+    }
+}
+
+/// Places body markers from body states on the host (in f64, rounded to `T`) and hands them to
+/// the solver: what [`SphSolver::place_bodies`] does unless a backend places them itself.
+pub fn place_on_host<T: Real, S: SphSolver<T> + ?Sized>(
+    solver: &mut S,
+    bodies: &[BodyMarkers<'_>],
+    states: &[BodyKinematics],
+) {
+    let (mut pos, mut vel, mut acc) = (Vec::new(), Vec::new(), Vec::new());
+    for (b, s) in bodies.iter().zip(states) {
+        pos.clear();
+        vel.clear();
+        acc.clear();
+        for l in b.local {
+            let [x, v, a] = s.point(*l);
+            pos.push(Vec3::of(x));
+            vel.push(Vec3::of(v));
+            acc.push(Vec3::of(a));
+        }
+        solver.set_marker_kinematics(b.first, &pos, &vel, &acc);
+    }
+}
+
 /// A soil solver.
 pub trait SphSolver<T: Real> {
     /// `"cpu"` or `"wgpu"`.
@@ -54,13 +127,43 @@ pub trait SphSolver<T: Real> {
     fn masses(&self) -> &[T];
     /// Original particle indices.
     fn ids(&self) -> &[u32];
-    /// Marker positions (m), original order.
+    /// Marker positions (m), original order (on a device backend, as of the last `sync` or
+    /// `set_marker_kinematics`).
     fn marker_positions(&self) -> &[Vec3<T>];
-    /// Force on each body marker from the soil in the last step (N), original order. The
-    /// wgpu backend reads back only the markers of bodies (walls read zero).
+    /// Force on each marker from the soil in the last step (N), original order (on a device
+    /// backend, as of the last `sync`).
     fn marker_forces(&self) -> &[Vec3<T>];
     /// Sets the kinematics of the markers `first..first + pos.len()` (original order).
     fn set_marker_kinematics(&mut self, first: usize, pos: &[Vec3<T>], vel: &[Vec3<T>], acc: &[Vec3<T>]);
+    /// Places the markers of each body from its state (position, velocity, acceleration of
+    /// every marker from the rigid motion). The wgpu backend keeps the body-frame positions on
+    /// the device and takes only the states.
+    fn place_bodies(&mut self, bodies: &[BodyMarkers<'_>], states: &[BodyKinematics]) {
+        place_on_host(self, bodies, states);
+    }
+    /// The force (N) and the torque about `about[k]` (N m) the soil exerted on each body's
+    /// markers in the last step. The wgpu backend sums them on the device.
+    fn body_wrenches(&self, bodies: &[BodyMarkers<'_>], about: &[[f64; 3]]) -> Vec<[[f64; 3]; 2]> {
+        let f = self.marker_forces();
+        let x = self.marker_positions();
+        bodies
+            .iter()
+            .zip(about)
+            .map(|(b, c)| {
+                let mut w = [[0.0; 3]; 2];
+                for i in b.first..b.first + b.local.len() {
+                    let fi = f[i].as_f64();
+                    let xi = x[i].as_f64();
+                    let t = cross(std::array::from_fn(|k| xi[k] - c[k]), fi);
+                    for k in 0..3 {
+                        w[0][k] += fi[k];
+                        w[1][k] += t[k];
+                    }
+                }
+                w
+            })
+            .collect()
+    }
     /// The shader variants compiled for this scene (empty on the CPU).
     fn variants(&self) -> Vec<String>;
     /// The CPU solver, when this is one (for diagnostics only it has: impulses, flags).

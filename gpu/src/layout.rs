@@ -139,6 +139,21 @@ pub struct Material {
     pub pad: [f32; 2],
 }
 
+/// A body's state for marker placement and its marker range (see `Body` in bodies.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Body {
+    pub rotation: [f32; 4],
+    pub origin: [f32; 3],
+    pub com: [f32; 3],
+    pub linvel: [f32; 3],
+    pub angvel: [f32; 3],
+    pub linacc: [f32; 3],
+    pub angacc: [f32; 3],
+    pub first: u32,
+    pub count: u32,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -152,5 +167,6 @@ mod tests {
         assert_eq!(size_of::<Marker>(), 10 * 4);
         assert_eq!(size_of::<Info>(), 12 * 4);
         assert_eq!(size_of::<Material>(), 20 * 4);
+        assert_eq!(size_of::<Body>(), 24 * 4);
     }
 }

@@ -8,14 +8,14 @@ use regolith_fsi::cpu::GridSpec;
 use regolith_fsi::kernel::{CubicSpline, Kernel, WendlandC2};
 use regolith_fsi::math::{Sym3, Vec3};
 use regolith_fsi::rheology::{Material, PointState, Rheology, RheologyError};
-use regolith_fsi::{MarkerInit, ParticleInit, SolverError, SphSolver, StepReport};
+use regolith_fsi::{BodyKinematics, BodyMarkers, MarkerInit, ParticleInit, SolverError, SphSolver, StepReport};
 
 use crate::GpuError;
 use crate::kernels::{
-    advance::Advance, dispatch, extrapolate::Extrapolate, forces::Forces, pack::Pack, permute::Permute, rates::Rates,
-    scan::Scan, sort::Sort, step_info::StepInfo,
+    advance::Advance, bodies::Bodies, dispatch, extrapolate::Extrapolate, forces::Forces, pack::Pack, permute::Permute,
+    rates::Rates, scan::Scan, sort::Sort, step_info::StepInfo,
 };
-use crate::layout::{self, Info, Marker, Packed, Params, Particle, Rate};
+use crate::layout::{self, Body, Info, Marker, Packed, Params, Particle, Rate};
 use crate::shader::{Effects, bind, groups};
 
 impl Effects {
@@ -46,6 +46,7 @@ struct Kernels {
     forces: Forces,
     info: StepInfo,
     advance: Advance,
+    bodies: Bodies,
 }
 
 struct Buffers {
@@ -75,6 +76,11 @@ struct Buffers {
     m_force: wgpu::Buffer,
     info_read: wgpu::Buffer,
     force_read: wgpu::Buffer,
+    body_states: wgpu::Buffer,
+    locals: wgpu::Buffer,
+    wrenches: wgpu::Buffer,
+    wrench_read: wgpu::Buffer,
+    markers_read: wgpu::Buffer,
     parts_read: wgpu::Buffer,
     rates_read: wgpu::Buffer,
 }
@@ -93,6 +99,7 @@ struct Groups {
     forces: wgpu::BindGroup,
     info: wgpu::BindGroup,
     advance: wgpu::BindGroup,
+    bodies: wgpu::BindGroup,
 }
 
 /// Host copy of the particles, refreshed by `sync`.
@@ -131,8 +138,16 @@ pub struct GpuSph {
     time: f64,
     steps: u64,
     markers_dirty: bool,
-    /// First marker that belongs to a body: forces from here on are read back every step.
-    first_body_marker: usize,
+    /// Bodies (owners 1..=n_bodies).
+    n_bodies: usize,
+    /// Body-frame marker positions are on the device (after the first `place_bodies`).
+    locals_uploaded: bool,
+    /// Bodies to place at the start of the next step (their largest marker count).
+    place_pending: Option<usize>,
+    /// Reference point of each body's device wrench: its centre of mass when placed (m).
+    wrench_ref: Vec<[f64; 3]>,
+    /// Force and torque about `wrench_ref` on each body in the last step.
+    last_wrench: Vec<[[f64; 3]; 2]>,
     m_host: Vec<Marker>,
     m_pos: Vec<Vec3<f32>>,
     m_force: Vec<Vec3<f32>>,
@@ -307,6 +322,7 @@ impl GpuSph {
             forces: Forces::new(device, &effects)?,
             info: StepInfo::new(device, &effects)?,
             advance: Advance::new(device, &effects)?,
+            bodies: Bodies::new(device, &effects)?,
         };
         let mut variants = vec![
             "sort[soil]".to_string(),
@@ -319,6 +335,7 @@ impl GpuSph {
             "soil_rates".into(),
             "marker_forces".into(),
             "step_info".into(),
+            "bodies".into(),
         ];
         let rheo: Vec<&str> =
             [(effects.dp, "dp"), (effects.mcc, "mcc")].iter().filter(|(on, _)| *on).map(|(_, s)| *s).collect();
@@ -353,6 +370,7 @@ impl GpuSph {
         if markers[first_body_marker..].iter().any(|m| m.owner == 0) {
             return Err(GpuError::Setup("wall markers must come before every body marker".into()));
         }
+        let n_bodies = markers.iter().map(|m| m.owner as usize).max().unwrap_or(0);
 
         let mk = |label: &str, bytes: u64, usage: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -393,7 +411,12 @@ impl GpuSph {
             m_packed: mk("markers.packed", sz(nm, size_of::<Packed>()), USAGE),
             m_force: mk("markers.force", sz(nm, 12), USAGE),
             info_read: mk("info.read", size_of::<Info>() as u64, read),
-            force_read: mk("force.read", sz(nm - first_body_marker, 12), read),
+            force_read: mk("force.read", sz(nm, 12), read),
+            body_states: mk("bodies", sz(n_bodies, size_of::<Body>()), USAGE),
+            locals: mk("bodies.local", sz(nm, 12), USAGE),
+            wrenches: mk("bodies.wrench", sz(n_bodies, 24), USAGE),
+            wrench_read: mk("bodies.wrench.read", sz(n_bodies, 24), read),
+            markers_read: mk("markers.read", sz(nm, size_of::<Marker>()), read),
             parts_read: mk("particles.read", sz(n, size_of::<Particle>()), read),
             rates_read: mk("rates.read", sz(n, size_of::<Rate>()), read),
         };
@@ -537,6 +560,19 @@ impl GpuSph {
                 &k.advance.layout,
                 &[(0, &b.params), (1, &b.parts), (2, &b.stage), (3, &b.rates), (4, &b.materials), (5, &b.info)],
             ),
+            bodies: bind(
+                device,
+                "bodies",
+                &k.bodies.layout,
+                &[
+                    (0, &b.params),
+                    (1, &b.body_states),
+                    (2, &b.locals),
+                    (3, &b.markers),
+                    (4, &b.m_force),
+                    (5, &b.wrenches),
+                ],
+            ),
         };
         let mut s = Self {
             device: device.clone(),
@@ -557,7 +593,11 @@ impl GpuSph {
             time: 0.0,
             steps: 0,
             markers_dirty: true,
-            first_body_marker,
+            n_bodies,
+            locals_uploaded: false,
+            place_pending: None,
+            wrench_ref: vec![[0.0; 3]; n_bodies],
+            last_wrench: vec![[[0.0; 3]; 2]; n_bodies],
             m_pos: m_host.iter().map(|m| Vec3::of(m.pos.map(f64::from))).collect(),
             m_host,
             m_force: vec![Vec3::zero(); nm],
@@ -670,6 +710,12 @@ impl GpuSph {
         let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("step") });
         let rk2 = self.effects.rk2;
         dispatch(&mut enc, &self.k.info.reset, &self.g.info, 1);
+        if let Some(most) = self.place_pending.take() {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None });
+            pass.set_pipeline(&self.k.bodies.place);
+            pass.set_bind_group(0, &self.g.bodies, &[]);
+            pass.dispatch_workgroups(groups(most), self.n_bodies as u32, 1);
+        }
         self.record_sort(&mut enc);
         self.markers_dirty = false;
         self.record_evaluate(&mut enc, 0, !rk2);
@@ -681,29 +727,26 @@ impl GpuSph {
         }
         dispatch(&mut enc, &self.k.advance.finish, &self.g.advance, groups(self.n));
         enc.copy_buffer_to_buffer(&self.b.info, 0, &self.b.info_read, 0, Some(size_of::<Info>() as u64));
-        let nb = self.nm - self.first_body_marker;
+        let nb = self.n_bodies;
         if nb > 0 {
-            enc.copy_buffer_to_buffer(
-                &self.b.m_force,
-                (self.first_body_marker * 12) as u64,
-                &self.b.force_read,
-                0,
-                Some((nb * 12) as u64),
-            );
+            // One workgroup per body sums its markers' force and torque.
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: None, timestamp_writes: None });
+            pass.set_pipeline(&self.k.bodies.wrench);
+            pass.set_bind_group(0, &self.g.bodies, &[]);
+            pass.dispatch_workgroups(nb as u32, 1, 1);
+            drop(pass);
+            enc.copy_buffer_to_buffer(&self.b.wrenches, 0, &self.b.wrench_read, 0, Some((nb * 24) as u64));
         }
         self.queue.submit([enc.finish()]);
         let info: Info =
             self.map(&self.b.info_read, size_of::<Info>() as u64, |b| *bytemuck::from_bytes(b)).map_err(dev)?;
         if nb > 0 {
-            let first = self.first_body_marker;
-            let forces: Vec<[f32; 3]> =
-                self.map(&self.b.force_read, (nb * 12) as u64, |b| bytemuck::cast_slice(b).to_vec()).map_err(dev)?;
-            for (dst, f) in self.m_force[first..].iter_mut().zip(forces) {
-                *dst = Vec3::new(f[0], f[1], f[2]);
+            let w: Vec<[f32; 6]> =
+                self.map(&self.b.wrench_read, (nb * 24) as u64, |b| bytemuck::cast_slice(b).to_vec()).map_err(dev)?;
+            for (dst, w) in self.last_wrench.iter_mut().zip(w) {
+                *dst = [[0, 1, 2].map(|k| f64::from(w[k])), [3, 4, 5].map(|k| f64::from(w[k]))];
             }
         }
-        // The device step is f32: one that stopped at the host's limit is that limit exactly,
-        // so the caller lands on its exchange or end time without a round-off sliver.
         let dt = match max_dt {
             Some(m) if info.dt == m as f32 => m,
             _ => f64::from(info.dt),
@@ -743,6 +786,18 @@ impl GpuSph {
             self.read_back(&self.b.rates, &self.b.rates_read, (n.max(1) * size_of::<Rate>()) as u64, |b| {
                 bytemuck::cast_slice::<u8, Rate>(b).to_vec()
             })?;
+        let nm = self.nm;
+        if nm > 0 {
+            let markers: Vec<Marker> =
+                self.read_back(&self.b.markers, &self.b.markers_read, (nm * size_of::<Marker>()) as u64, |b| {
+                    bytemuck::cast_slice::<u8, Marker>(b).to_vec()
+                })?;
+            self.m_pos = markers.iter().map(|m| Vec3::new(m.pos[0], m.pos[1], m.pos[2])).collect();
+            let forces: Vec<[f32; 3]> = self.read_back(&self.b.m_force, &self.b.force_read, (nm * 12) as u64, |b| {
+                bytemuck::cast_slice(b).to_vec()
+            })?;
+            self.m_force = forces.iter().map(|f| Vec3::new(f[0], f[1], f[2])).collect();
+        }
         let m = &mut self.mirror;
         let parts = &parts[..n];
         let v3 = |a: [f32; 3]| Vec3::new(a[0], a[1], a[2]);
@@ -842,6 +897,63 @@ impl SphSolver<f32> for GpuSph {
             );
         }
         self.markers_dirty = true;
+    }
+    fn place_bodies(&mut self, bodies: &[BodyMarkers<'_>], states: &[BodyKinematics]) {
+        if bodies.len() != self.n_bodies || states.len() != bodies.len() {
+            // Not the bodies the markers were built for: place them from the host.
+            regolith_fsi::place_on_host(self, bodies, states);
+            return;
+        }
+        if !self.locals_uploaded {
+            let mut locals = vec![[0.0f32; 3]; self.nm.max(1)];
+            for b in bodies {
+                for (i, l) in b.local.iter().enumerate() {
+                    locals[b.first + i] = l.map(|x| x as f32);
+                }
+            }
+            self.queue.write_buffer(&self.b.locals, 0, bytemuck::cast_slice(&locals));
+            self.locals_uploaded = true;
+        }
+        let f = |a: [f64; 3]| a.map(|x| x as f32);
+        let table: Vec<Body> = bodies
+            .iter()
+            .zip(states)
+            .map(|(b, s)| Body {
+                rotation: s.rotation.map(|x| x as f32),
+                origin: f(s.origin),
+                com: f(s.com),
+                linvel: f(s.linvel),
+                angvel: f(s.angvel),
+                linacc: f(s.linacc),
+                angacc: f(s.angacc),
+                first: b.first as u32,
+                count: b.local.len() as u32,
+            })
+            .collect();
+        // The device sums torques about the f32 centre of mass it was given.
+        self.wrench_ref = table.iter().map(|b| b.com.map(f64::from)).collect();
+        self.queue.write_buffer(&self.b.body_states, 0, bytemuck::cast_slice(&table));
+        self.place_pending = Some(bodies.iter().map(|b| b.local.len()).max().unwrap_or(0));
+        self.markers_dirty = true;
+    }
+    fn body_wrenches(&self, bodies: &[BodyMarkers<'_>], about: &[[f64; 3]]) -> Vec<[[f64; 3]; 2]> {
+        bodies
+            .iter()
+            .zip(about)
+            .enumerate()
+            .map(|(k, (_, a))| {
+                let [force, t_ref] = self.last_wrench[k];
+                let c = self.wrench_ref[k];
+                // Sum (x - a) x f = sum (x - c) x f + (c - a) x F.
+                let d = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+                let extra = [
+                    d[1] * force[2] - d[2] * force[1],
+                    d[2] * force[0] - d[0] * force[2],
+                    d[0] * force[1] - d[1] * force[0],
+                ];
+                [force, [t_ref[0] + extra[0], t_ref[1] + extra[1], t_ref[2] + extra[2]]]
+            })
+            .collect()
     }
     fn variants(&self) -> Vec<String> {
         self.variants.clone()

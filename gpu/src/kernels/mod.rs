@@ -3,6 +3,7 @@
 //! [`Effects`](crate::Effects); the buffers they run on live in [`crate::GpuSph`].
 
 pub(crate) mod advance;
+pub(crate) mod bodies;
 pub(crate) mod extrapolate;
 pub(crate) mod forces;
 pub(crate) mod pack;
