@@ -375,11 +375,14 @@ fn regolith(args: &[&str]) -> (i32, String, String) {
 }
 
 #[test]
-fn rigs_and_vehicles_run_on_wgpu_from_the_cli() {
+fn every_example_scene_runs_on_wgpu_from_the_cli() {
     for (scene, sets) in [
         ("cone_penetrometer.toml", vec!["--set", "simulation.end_time=0.004"]),
         ("single_wheel.toml", vec!["--set", "simulation.end_time=0.004", "--slips", "0.3"]),
         ("rover.toml", vec!["--set", "simulation.end_time=0.004"]),
+        ("cone_probe.toml", vec!["--set", "simulation.end_time=0.002"]),
+        ("slope.toml", vec!["--set", "simulation.end_time=0.002"]),
+        ("column_collapse_tall.toml", vec!["--set", "simulation.end_time=0.002"]),
     ] {
         let out = common::out_dir(&format!("wgpu_cli_{scene}"));
         let path = format!("{}/examples/scenes/{scene}", env!("CARGO_MANIFEST_DIR"));
