@@ -139,6 +139,7 @@ fn kernels_match(text: &str, seed: u64) {
         let rc = cpu.step(None).expect("cpu step");
         let rg = gpu.step(None).expect("gpu step");
         gpu.sync().expect("sync");
+        gpu.sync_diagnostics().expect("diagnostics");
         // Cell sort (bin, scan, scatter, order_bins, permute): the same order exactly.
         assert_eq!(cpu.active(), gpu.active());
         assert_eq!(cpu.ids(), SphSolver::ids(&gpu), "step {step}: cell order");
@@ -233,6 +234,7 @@ fn body_placement_and_wrench_kernels_match_their_cpu_twins() {
         cpu.step(None).expect("cpu");
         gpu.step(None).expect("gpu");
         gpu.sync().expect("sync");
+        gpu.sync_diagnostics().expect("diagnostics");
         // Placement in f32 on the device against f64 rounded to f32 on the host: one rounding.
         let dx = cpu.marker_positions()[first..]
             .iter()

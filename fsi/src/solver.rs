@@ -40,26 +40,20 @@ pub struct BodyKinematics {
     pub angacc: [f64; 3],
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
 impl BodyKinematics {
     /// A body-frame point in the world, with its velocity and acceleration (rigid motion).
     pub fn point(&self, local: [f64; 3]) -> [[f64; 3]; 3] {
         let [qx, qy, qz, qw] = self.rotation;
-        let u = [qx, qy, qz];
-        // v' = v + 2w (u × v) + 2 u × (u × v)
-        let t = cross(u, local).map(|c| 2.0 * c);
-        let ut = cross(u, t);
-        let x: [f64; 3] = std::array::from_fn(|k| self.origin[k] + (local[k] + qw * t[k] + ut[k]));
-        let r: [f64; 3] = std::array::from_fn(|k| x[k] - self.com[k]);
-        let wr = cross(self.angvel, r);
-        let v: [f64; 3] = std::array::from_fn(|k| self.linvel[k] + wr[k]);
-        let ar = cross(self.angacc, r);
-        let wwr = cross(self.angvel, wr);
-        let a: [f64; 3] = std::array::from_fn(|k| self.linacc[k] + ar[k] + wwr[k]);
-        [x, v, a]
+        let (u, l) = (Vec3::new(qx, qy, qz), Vec3::of(local));
+        // v' = v + w t + u × t with t = 2 u × v
+        let t = u.cross(l) * 2.0;
+        let x = Vec3::of(self.origin) + (l + t * qw + u.cross(t));
+        let r = x - Vec3::of(self.com);
+        let w = Vec3::of(self.angvel);
+        let wr = w.cross(r);
+        let v = Vec3::of(self.linvel) + wr;
+        let a = Vec3::of(self.linacc) + Vec3::of(self.angacc).cross(r) + w.cross(wr);
+        [x.as_f64(), v.as_f64(), a.as_f64()]
     }
 }
 
@@ -127,11 +121,12 @@ pub trait SphSolver<T: Real> {
     fn masses(&self) -> &[T];
     /// Original particle indices.
     fn ids(&self) -> &[u32];
-    /// Marker positions (m), original order (on a device backend, as of the last `sync` or
-    /// `set_marker_kinematics`).
+    /// Marker positions (m), original order (on the wgpu backend, as of the last
+    /// `GpuSph::sync_diagnostics` or `set_marker_kinematics`).
     fn marker_positions(&self) -> &[Vec3<T>];
-    /// Force on each marker from the soil in the last step (N), original order (on a device
-    /// backend, as of the last `sync`).
+    /// Force on each marker from the soil in the last step (N), original order (on the wgpu
+    /// backend, as of the last `GpuSph::sync_diagnostics`; bodies get their wrenches from
+    /// [`SphSolver::body_wrenches`]).
     fn marker_forces(&self) -> &[Vec3<T>];
     /// Sets the kinematics of the markers `first..first + pos.len()` (original order).
     fn set_marker_kinematics(&mut self, first: usize, pos: &[Vec3<T>], vel: &[Vec3<T>], acc: &[Vec3<T>]);
@@ -150,17 +145,13 @@ pub trait SphSolver<T: Real> {
             .iter()
             .zip(about)
             .map(|(b, c)| {
-                let mut w = [[0.0; 3]; 2];
+                let (mut force, mut torque) = (Vec3::<f64>::zero(), Vec3::<f64>::zero());
                 for i in b.first..b.first + b.local.len() {
-                    let fi = f[i].as_f64();
-                    let xi = x[i].as_f64();
-                    let t = cross(std::array::from_fn(|k| xi[k] - c[k]), fi);
-                    for k in 0..3 {
-                        w[0][k] += fi[k];
-                        w[1][k] += t[k];
-                    }
+                    let fi = Vec3::of(f[i].as_f64());
+                    force += fi;
+                    torque += (Vec3::of(x[i].as_f64()) - Vec3::of(*c)).cross(fi);
                 }
-                w
+                [force.as_f64(), torque.as_f64()]
             })
             .collect()
     }

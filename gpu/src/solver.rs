@@ -604,6 +604,7 @@ impl GpuSph {
             mirror: Mirror::default(),
         };
         s.sync().map_err(|e| GpuError::Device(e.to_string()))?;
+        s.sync_diagnostics()?;
         Ok(s)
     }
 
@@ -627,12 +628,12 @@ impl GpuSph {
         self.mirror.flags.iter().map(|f| f & layout::FLAG_DETACHED != 0).collect()
     }
 
-    /// Accelerations of the last stage (host copy, after `sync`).
+    /// Accelerations of the last stage (host copy, after `sync_diagnostics`).
     pub fn accelerations(&self) -> &[Vec3<f32>] {
         &self.mirror.acc[..self.active]
     }
 
-    /// Free-surface measure of the last first stage (host copy, after `sync`).
+    /// Free-surface measure of the last first stage (host copy, after `sync_diagnostics`).
     pub fn free_surface_measure(&self) -> &[f32] {
         &self.mirror.fs[..self.active]
     }
@@ -782,22 +783,6 @@ impl GpuSph {
             self.read_back(&self.b.parts, &self.b.parts_read, (n.max(1) * size_of::<Particle>()) as u64, |b| {
                 bytemuck::cast_slice::<u8, Particle>(b).to_vec()
             })?;
-        let rates: Vec<Rate> =
-            self.read_back(&self.b.rates, &self.b.rates_read, (n.max(1) * size_of::<Rate>()) as u64, |b| {
-                bytemuck::cast_slice::<u8, Rate>(b).to_vec()
-            })?;
-        let nm = self.nm;
-        if nm > 0 {
-            let markers: Vec<Marker> =
-                self.read_back(&self.b.markers, &self.b.markers_read, (nm * size_of::<Marker>()) as u64, |b| {
-                    bytemuck::cast_slice::<u8, Marker>(b).to_vec()
-                })?;
-            self.m_pos = markers.iter().map(|m| Vec3::new(m.pos[0], m.pos[1], m.pos[2])).collect();
-            let forces: Vec<[f32; 3]> = self.read_back(&self.b.m_force, &self.b.force_read, (nm * 12) as u64, |b| {
-                bytemuck::cast_slice(b).to_vec()
-            })?;
-            self.m_force = forces.iter().map(|f| Vec3::new(f[0], f[1], f[2])).collect();
-        }
         let m = &mut self.mirror;
         let parts = &parts[..n];
         let v3 = |a: [f32; 3]| Vec3::new(a[0], a[1], a[2]);
@@ -813,8 +798,32 @@ impl GpuSph {
         m.mass = parts.iter().map(|p| p.mass).collect();
         m.id = parts.iter().map(|p| p.id).collect();
         m.flags = parts.iter().map(|p| p.flags).collect();
-        m.acc = rates[..n].iter().map(|r| v3(r.acc)).collect();
-        m.fs = rates[..n].iter().map(|r| r.fs).collect();
+        Ok(())
+    }
+
+    /// Reads back what only diagnostics and tests look at: the last stage's rates
+    /// (accelerations, free-surface measure) and every marker's position and force. Not part
+    /// of `sync`, which runs once per exchange: with walls the markers outnumber the particles.
+    pub fn sync_diagnostics(&mut self) -> Result<(), GpuError> {
+        let n = self.n;
+        let rates: Vec<Rate> =
+            self.read_back(&self.b.rates, &self.b.rates_read, (n.max(1) * size_of::<Rate>()) as u64, |b| {
+                bytemuck::cast_slice::<u8, Rate>(b).to_vec()
+            })?;
+        self.mirror.acc = rates[..n].iter().map(|r| Vec3::new(r.acc[0], r.acc[1], r.acc[2])).collect();
+        self.mirror.fs = rates[..n].iter().map(|r| r.fs).collect();
+        let nm = self.nm;
+        if nm > 0 {
+            let markers: Vec<Marker> =
+                self.read_back(&self.b.markers, &self.b.markers_read, (nm * size_of::<Marker>()) as u64, |b| {
+                    bytemuck::cast_slice::<u8, Marker>(b).to_vec()
+                })?;
+            self.m_pos = markers.iter().map(|m| Vec3::new(m.pos[0], m.pos[1], m.pos[2])).collect();
+            let forces: Vec<[f32; 3]> = self.read_back(&self.b.m_force, &self.b.force_read, (nm * 12) as u64, |b| {
+                bytemuck::cast_slice(b).to_vec()
+            })?;
+            self.m_force = forces.iter().map(|f| Vec3::new(f[0], f[1], f[2])).collect();
+        }
         Ok(())
     }
 }
@@ -943,15 +952,9 @@ impl SphSolver<f32> for GpuSph {
             .enumerate()
             .map(|(k, (_, a))| {
                 let [force, t_ref] = self.last_wrench[k];
-                let c = self.wrench_ref[k];
-                // Sum (x - a) x f = sum (x - c) x f + (c - a) x F.
-                let d = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-                let extra = [
-                    d[1] * force[2] - d[2] * force[1],
-                    d[2] * force[0] - d[0] * force[2],
-                    d[0] * force[1] - d[1] * force[0],
-                ];
-                [force, [t_ref[0] + extra[0], t_ref[1] + extra[1], t_ref[2] + extra[2]]]
+                // Sum (x - a) × f = sum (x - c) × f + (c - a) × F.
+                let arm = Vec3::<f64>::of(self.wrench_ref[k]) - Vec3::of(*a);
+                [force, (Vec3::of(t_ref) + arm.cross(Vec3::of(force))).as_f64()]
             })
             .collect()
     }
