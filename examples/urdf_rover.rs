@@ -7,8 +7,8 @@
 use std::io::Write;
 use std::path::PathBuf;
 
+use regolith::output::series::roll_pitch_yaw_deg;
 use regolith::scene::load_scene;
-use regolith::series::roll_pitch_yaw_deg;
 use regolith::sim::Simulation;
 
 fn main() -> anyhow::Result<()> {

@@ -12,8 +12,9 @@ use std::time::Instant;
 use regolith_fsi::Real;
 use serde::Serialize;
 
+use crate::build::build_soil;
+use crate::driver::RunError;
 use crate::input::InputError;
-use crate::run::{RunError, build_soil};
 use crate::scene::{Precision, Scene, load_scene_source};
 
 /// Which rheology the bench block uses.

@@ -1,27 +1,45 @@
 //! # Regolith
 //!
 //! Deformable soil simulated with SPH (the continuum representation model) and coupled to rigid
-//! bodies. This facade re-exports the member crates and holds what ties them together: scene
-//! and material files, the material-point driver, plots and the command-line tool's commands.
+//! bodies. This facade re-exports the member crates and holds what ties them together. Its
+//! modules read in the order the data flows (see `ARCHITECTURE.md`); each imports only the
+//! ones before it:
+//!
+//! 1. [`input`]: one-line user-input errors and TOML helpers;
+//! 2. [`material`], [`element`]: material files and the material-point driver;
+//! 3. [`scene`]: scene files → a validated [`scene::Scene`];
+//! 4. [`build`]: Scene → terrain, rigid world, markers, soil solver;
+//! 5. [`sim`]: the scripting API, [`sim::Simulation`];
+//! 6. [`driver`]: the run loop, its stop token and observers;
+//! 7. [`output`]: series, recording, particles CSV, JSON, plots;
+//! 8. [`rig`]: the plate, cone and wheel rigs (body controllers with their reports);
+//! 9. [`run`]: a whole `regolith run` — build, drive, write, summarise;
+//! 10. [`error`]: the facade [`Error`] over every stage's error type;
+//! 11. [`bench`], [`cli`]: the benchmark and the command-line tool.
+//!
+//! `tests/architecture.rs` fails on an import against this order.
 #![warn(missing_docs)]
 
 pub mod bench;
+pub mod build;
 pub mod cli;
+pub mod driver;
 pub mod element;
-pub mod gpu;
+pub mod error;
 pub mod input;
 pub mod material;
-pub mod plot;
-pub mod record;
+pub mod output;
 pub mod rig;
 pub mod run;
 pub mod scene;
-pub mod series;
 pub mod sim;
 
-pub mod element_plot;
-
+pub use error::Error;
+pub use regolith_coupling as coupling;
 pub use regolith_fsi as fsi;
+pub use regolith_rigid as rigid;
 pub use regolith_terrain as terrain;
+pub use regolith_vehicles as vehicles;
+pub use regolith_wgpu as wgpu_backend;
 
 pub use regolith_fsi::config::DEFAULT_FREE_SURFACE_THRESHOLD;

@@ -14,12 +14,12 @@
 
 use std::path::Path;
 
-use regolith_coupling::{ExchangeReport, FsiSystem, SoilInit, Wrench, shape_markers};
-use regolith_fsi::Real;
-use regolith_rigid::{BodyId, BodyState, JointDesc, JointId, Motion, Pose, RigidWorld, ShapeDesc};
+use regolith_coupling::{ExchangeReport, FsiSystem, Wrench};
+use regolith_fsi::{Real, SolverError};
+use regolith_rigid::{BodyId, BodyState, JointDesc, JointId, Pose, ShapeDesc};
 use regolith_terrain::TerrainBuild;
 
-use crate::run::RunError;
+use crate::build::{BuildError, SurfaceGrid, assemble};
 use crate::scene::{Scene, load_scene};
 
 /// A body of a [`Simulation`], by index into the scene's bodies.
@@ -42,63 +42,6 @@ pub struct Simulation<T: Real> {
     surface0: SurfaceGrid,
 }
 
-/// The soil surface height on a grid of cells of one spacing: the top of the highest
-/// particle's cell in each column.
-#[derive(Clone, Debug)]
-pub struct SurfaceGrid {
-    origin: [f64; 2],
-    cell: f64,
-    nx: usize,
-    ny: usize,
-    top: Vec<f64>,
-}
-
-impl SurfaceGrid {
-    /// From particle centres with spacing `d0`.
-    pub fn new(points: impl Iterator<Item = [f64; 3]> + Clone, d0: f64) -> Self {
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in points.clone() {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        if !lo[0].is_finite() {
-            return Self { origin: [0.0; 2], cell: d0, nx: 0, ny: 0, top: Vec::new() };
-        }
-        let origin = [lo[0] - 0.5 * d0, lo[1] - 0.5 * d0];
-        let nx = ((hi[0] - origin[0]) / d0).floor() as usize + 1;
-        let ny = ((hi[1] - origin[1]) / d0).floor() as usize + 1;
-        let mut top = vec![f64::NEG_INFINITY; nx * ny];
-        for p in points {
-            let i = (((p[0] - origin[0]) / d0) as usize).min(nx - 1);
-            let j = (((p[1] - origin[1]) / d0) as usize).min(ny - 1);
-            top[j * nx + i] = top[j * nx + i].max(p[2] + 0.5 * d0);
-        }
-        Self { origin, cell: d0, nx, ny, top }
-    }
-
-    /// Highest surface within `r` of `(x, y)` (`None` off the soil).
-    pub fn height(&self, x: f64, y: f64, r: f64) -> Option<f64> {
-        if self.nx == 0 {
-            return None;
-        }
-        let idx = |v: f64, o: f64, n: usize| ((v - o) / self.cell).floor().clamp(0.0, (n - 1) as f64) as usize;
-        let (i0, i1) = (idx(x - r, self.origin[0], self.nx), idx(x + r, self.origin[0], self.nx));
-        let (j0, j1) = (idx(y - r, self.origin[1], self.ny), idx(y + r, self.origin[1], self.ny));
-        if x + r < self.origin[0] || y + r < self.origin[1] {
-            return None;
-        }
-        let mut best = f64::NEG_INFINITY;
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                best = best.max(self.top[j * self.nx + i]);
-            }
-        }
-        best.is_finite().then_some(best)
-    }
-}
-
 /// A wheel's state: slip, sinkage and speed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WheelState {
@@ -113,106 +56,23 @@ pub struct WheelState {
 
 impl<T: Real> Simulation<T> {
     /// Loads and validates a scene file and builds it.
-    pub fn load(path: &Path) -> Result<Self, RunError> {
-        let scene = load_scene(path, &[]).map_err(|e| RunError::Build(e.to_string()))?;
+    pub fn load(path: &Path) -> Result<Self, BuildError> {
+        let scene = load_scene(path, &[])?;
         Self::new(&scene)
     }
 
-    /// Builds a validated scene.
-    pub fn new(scene: &Scene) -> Result<Self, RunError> {
-        let build = |e: String| RunError::Build(e);
-        let (mats, terrain) = crate::run::scene_terrain::<T>(scene)?;
-        let d0 = scene.solver.spacing;
-        let surface0 = SurfaceGrid::new(terrain.particles.iter().map(|p| p.pos), d0);
-        let mut scene = scene.clone();
-        place_vehicles(&mut scene, &surface0)?;
-        let scene = &scene;
-        // Soil cannot start inside a body: carve each FSI body (grown by half a spacing, the
-        // distance at which its markers and the soil would overlap) out of the soil.
-        let mut terrain = terrain;
-        for b in scene.bodies.iter().filter(|b| b.fsi) {
-            let pose = b.desc.pose;
-            let inv = [-pose.rotation[0], -pose.rotation[1], -pose.rotation[2], pose.rotation[3]];
-            let local: Vec<[f64; 3]> = terrain
-                .particles
-                .iter()
-                .map(|p| regolith_rigid::quat_rotate(inv, [0, 1, 2].map(|k| p.pos[k] - pose.translation[k])))
-                .collect();
-            let inside = b.desc.shape.contains_points(&local, 0.5 * d0);
-            let removed = inside.iter().filter(|x| **x).count();
-            if removed > 0 {
-                let mut it = inside.iter();
-                terrain.particles.retain(|_| !it.next().copied().unwrap_or(false));
-                terrain
-                    .notes
-                    .push(format!("removed {removed} soil particles that started inside body \"{}\"", b.desc.name));
-            }
-        }
-        if terrain.particles.is_empty() {
-            return Err(build("the bodies fill all the soil".into()));
-        }
-        let mut rigid = RigidWorld::new(scene.solver.gravity);
-        // The container's floor and walls, for body–wall contact (outside the soil's walls).
-        let c = terrain.container;
-        let t = 0.25 * (c.size()[0].min(c.size()[1])).max(scene.solver.spacing);
-        let [x0, y0, z0] = c.min;
-        let [x1, y1, z1] = c.max;
-        let walls = [
-            ("container floor", [x0 - t, y0 - t, z0 - t], [x1 + t, y1 + t, z0]),
-            ("container wall -x", [x0 - t, y0 - t, z0], [x0, y1 + t, z1]),
-            ("container wall +x", [x1, y0 - t, z0], [x1 + t, y1 + t, z1]),
-            ("container wall -y", [x0, y0 - t, z0], [x1, y0, z1]),
-            ("container wall +y", [x0, y1, z0], [x1, y1 + t, z1]),
-        ];
-        for (name, lo, hi) in walls {
-            rigid.add_fixed_box(name, lo, hi, 0.5).map_err(|e| build(e.to_string()))?;
-        }
-        let (mut lo, mut hi) = terrain.domain;
-        let mut ids = Vec::new();
-        let mut fsi_bodies = Vec::new();
-        let mut fsi = Vec::new();
-        for b in &scene.bodies {
-            let id = rigid.add_body(&b.desc).map_err(|e| build(format!("{}: {e}", b.key)))?;
-            ids.push(id);
-            if b.fsi {
-                let local = shape_markers(&b.desc.shape, scene.solver.spacing, b.bce_layers)
-                    .map_err(|e| build(format!("{}: {e}", b.key)))?;
-                fsi.push(Some(fsi_bodies.len()));
-                fsi_bodies.push((id, local));
-                // The neighbour grid must cover the body where it starts and, if prescribed,
-                // where it ends.
-                let r = b.desc.shape.bounding_radius() + 2.0 * scene.solver.h();
-                let p = b.desc.pose.translation;
-                let mut ends = vec![p];
-                if let Motion::Prescribed { linvel, .. } = b.desc.motion {
-                    ends.push([0, 1, 2].map(|k| p[k] + linvel[k] * scene.end_time));
-                }
-                for e in ends {
-                    for k in 0..3 {
-                        lo[k] = lo[k].min(e[k] - r);
-                        hi[k] = hi[k].max(e[k] + r);
-                    }
-                }
-            } else {
-                fsi.push(None);
-            }
-        }
-        let mut vehicle_joints = Vec::new();
-        for v in &scene.vehicles {
-            vehicle_joints.push(build_vehicle_joints(&mut rigid, v, &scene.bodies, &ids)?);
-        }
-        let soil = SoilInit {
-            config: scene.solver,
-            materials: mats,
-            particles: &terrain.particles,
-            wall_markers: &terrain.markers,
-            domain: (lo, hi),
+    /// Builds a validated scene (see [`crate::build::assemble`]).
+    pub fn new(scene: &Scene) -> Result<Self, BuildError> {
+        let a = assemble::<T>(scene)?;
+        let mut sim = Self {
+            system: a.system,
+            scene: a.scene,
+            terrain: a.terrain,
+            ids: a.ids,
+            fsi: a.fsi,
+            vehicle_joints: a.vehicle_joints,
+            surface0: a.surface0,
         };
-        let wgpu = scene.backend == crate::scene::Backend::Wgpu;
-        let make = |c, m, p: &[_], mk: &[_], d| crate::gpu::make_solver::<T>(wgpu, c, m, p, mk, d);
-        let system = FsiSystem::with_solver(soil, rigid, fsi_bodies, scene.exchange_interval, &make)
-            .map_err(|e| build(e.to_string()))?;
-        let mut sim = Self { system, scene: scene.clone(), terrain, ids, fsi, vehicle_joints, surface0 };
         sim.apply_drives();
         Ok(sim)
     }
@@ -249,8 +109,11 @@ impl<T: Real> Simulation<T> {
     }
 
     /// Adds a joint (world-frame anchor and axis).
-    pub fn add_joint(&mut self, j: &JointDesc) -> Result<JointId, RunError> {
-        self.system.rigid.add_joint(j).map_err(|e| RunError::Build(e.to_string()))
+    pub fn add_joint(&mut self, j: &JointDesc) -> Result<JointId, BuildError> {
+        self.system
+            .rigid
+            .add_joint(j)
+            .map_err(|source| BuildError::Rigid { key: format!("joint \"{}\"", j.name), source })
     }
 
     /// Changes a joint motor's target velocity.
@@ -260,7 +123,7 @@ impl<T: Real> Simulation<T> {
 
     /// Advances one exchange interval (or to `max` seconds ahead if sooner). Vehicle drive
     /// profiles are applied at the start of the interval.
-    pub fn step_max(&mut self, max: Option<f64>) -> Result<ExchangeReport, RunError> {
+    pub fn step_max(&mut self, max: Option<f64>) -> Result<ExchangeReport, SolverError> {
         self.apply_drives();
         let r = self.system.advance(max)?;
         // A device backend refreshes its host copy of the particles once per exchange, for
@@ -292,17 +155,24 @@ impl<T: Real> Simulation<T> {
     /// left-side wheels at `left`, the right-side ones at `right` (equal for straight driving,
     /// different for skid steering), with motor torques up to `max_torque` (N m). Replaces the
     /// scene's drive profiles of those wheels.
-    pub fn set_vehicle_drive(&mut self, vehicle: &str, left: f64, right: f64, max_torque: f64) -> Result<(), RunError> {
+    pub fn set_vehicle_drive(
+        &mut self,
+        vehicle: &str,
+        left: f64,
+        right: f64,
+        max_torque: f64,
+    ) -> Result<(), BuildError> {
         let vi = self
             .scene
             .vehicles
             .iter()
             .position(|v| v.name == vehicle)
-            .ok_or_else(|| RunError::Build(format!("no vehicle \"{vehicle}\"")))?;
+            .ok_or_else(|| BuildError::UnknownVehicle(vehicle.to_string()))?;
         if !(max_torque > 0.0 && max_torque.is_finite() && left.is_finite() && right.is_finite()) {
-            return Err(RunError::Build(format!(
-                "vehicle \"{vehicle}\": wheel speeds must be finite and max_torque > 0"
-            )));
+            return Err(BuildError::InvalidDrive {
+                vehicle: vehicle.to_string(),
+                message: "wheel speeds must be finite and max_torque > 0".into(),
+            });
         }
         let v = &mut self.scene.vehicles[vi];
         v.max_torque = max_torque;
@@ -358,7 +228,7 @@ impl<T: Real> Simulation<T> {
     }
 
     /// Advances one exchange interval.
-    pub fn step(&mut self) -> Result<ExchangeReport, RunError> {
+    pub fn step(&mut self) -> Result<ExchangeReport, SolverError> {
         self.step_max(None)
     }
 
@@ -429,80 +299,4 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 fn steering_gains(max_torque: f64) -> (f64, f64) {
     let k = max_torque / 0.05;
     (k, 0.1 * k)
-}
-
-/// Lowers every vehicle without a given height so that its lowest collision point sits one
-/// spacing above the top soil particle's centre below it (the contact distance of markers and
-/// soil), as the rigs place their bodies.
-fn place_vehicles(scene: &mut Scene, surface: &SurfaceGrid) -> Result<(), RunError> {
-    let d0 = scene.solver.spacing;
-    for v in scene.vehicles.clone() {
-        if !v.place_on_soil {
-            continue;
-        }
-        let mut lift = f64::NEG_INFINITY;
-        for li in 0..v.model.links.len() {
-            let b = &scene.bodies[v.body(li)];
-            let low = b.desc.shape.lowest_z(&b.desc.pose);
-            if !low.is_finite() {
-                continue;
-            }
-            let t = b.desc.pose.translation;
-            if let Some(top) = surface.height(t[0], t[1], b.desc.shape.bounding_radius()) {
-                lift = lift.max(top + 0.5 * d0 - low);
-            }
-        }
-        if !lift.is_finite() {
-            return Err(RunError::Build(format!(
-                "{}: vehicle \"{}\" is not over the soil: place it over the terrain or give position = [x, y, z]",
-                v.key, v.name
-            )));
-        }
-        for li in 0..v.model.links.len() {
-            scene.bodies[v.body(li)].desc.pose.translation[2] += lift;
-        }
-    }
-    Ok(())
-}
-
-/// Builds a vehicle's joints between its link bodies (`bodies[i]` added to `rigid` as
-/// `ids[i]`, at their current poses), with wheel velocity motors (target 0 until driven) and
-/// joint limits. Returns the rapier joint of each model joint.
-pub fn build_vehicle_joints(
-    rigid: &mut RigidWorld,
-    v: &crate::scene::VehicleSpec,
-    bodies: &[crate::scene::BodySpec],
-    ids: &[BodyId],
-) -> Result<Vec<Option<JointId>>, RunError> {
-    use regolith_vehicles::JointType;
-    let mut out = Vec::with_capacity(v.model.joints.len());
-    for (ji, j) in v.model.joints.iter().enumerate() {
-        let child = &bodies[v.body(j.child)].desc.pose;
-        let kind = match j.kind {
-            JointType::Fixed => regolith_rigid::JointKind::Fixed,
-            JointType::Continuous | JointType::Revolute { .. } => regolith_rigid::JointKind::Revolute,
-            JointType::Prismatic { .. } => regolith_rigid::JointKind::Prismatic,
-        };
-        let driven = v.drive.iter().any(|(d, _)| *d == ji);
-        let desc = JointDesc {
-            name: format!("{}/{}", v.name, j.name),
-            body1: ids[v.body(j.parent)],
-            body2: ids[v.body(j.child)],
-            kind,
-            anchor: child.translation,
-            axis: child.rotate(j.axis),
-            motor: driven.then_some(regolith_rigid::VelocityMotor { target: 0.0, max_effort: v.max_torque }),
-        };
-        let id = rigid.add_joint(&desc).map_err(|e| RunError::Build(format!("{}: {e}", v.key)))?;
-        match j.kind {
-            JointType::Revolute { lower, upper } | JointType::Prismatic { lower, upper }
-                if lower.is_finite() && upper.is_finite() =>
-            {
-                rigid.set_joint_limits(id, lower, upper);
-            }
-            _ => {}
-        }
-        out.push(Some(id));
-    }
-    Ok(out)
 }

@@ -6,8 +6,8 @@
 
 mod common;
 
+use regolith::build::build_soil;
 use regolith::fsi::Real;
-use regolith::run::build_soil;
 
 fn block(kernel: &str, precision: &str, shifting: &str) -> String {
     format!(

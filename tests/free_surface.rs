@@ -5,7 +5,7 @@
 
 mod common;
 
-use regolith::run::build_soil;
+use regolith::build::build_soil;
 
 fn bed(kernel: &str, h_factor: f64, extra: &str) -> String {
     format!(

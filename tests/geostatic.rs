@@ -3,8 +3,8 @@
 
 mod common;
 
+use regolith::build::build_soil;
 use regolith::fsi::Real;
-use regolith::run::build_soil;
 
 fn bed(model: &str, precision: &str, kernel: &str) -> String {
     let material = match model {

@@ -204,7 +204,7 @@ fn inspect_lists_topics_counts_and_the_time_range() {
 
 #[test]
 fn the_embedded_schemas_reject_a_message_that_lacks_a_field() {
-    use regolith::record::foxglove;
+    use regolith::output::record::foxglove;
     let schema = jsonschema::validator_for(&foxglove::point_cloud_schema()).expect("compiles");
     let mut msg = foxglove::point_cloud(0.25, "world", &[0u8; 32]);
     assert!(schema.validate(&msg).is_ok());

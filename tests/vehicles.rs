@@ -7,7 +7,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use regolith::sim::{Body, Simulation, build_vehicle_joints};
+use regolith::build::build_vehicle_joints;
+use regolith::sim::{Body, Simulation};
 use regolith_rigid::{RigidWorld, ShapeDesc};
 use regolith_vehicles::{JointType, PackagePath, UrdfModel};
 
@@ -242,7 +243,7 @@ fn driving_forward_moves_the_rover_with_positive_slip() {
     assert!(dx > 0.02, "the rover must move forward (moved {dx} m)");
     assert!(slip > 0.0 && slip < 1.0, "slip {slip}");
     let st = sim.body_state(chassis);
-    let [_, _, yaw] = regolith::series::roll_pitch_yaw_deg(st.rotation);
+    let [_, _, yaw] = regolith::output::series::roll_pitch_yaw_deg(st.rotation);
     assert!(yaw.abs() < 5.0, "straight drive turned by {yaw}°");
 }
 
@@ -257,7 +258,7 @@ fn skid_steering_turns_the_rover() {
         sim.step().expect("step");
     }
     let st = sim.body_state(chassis);
-    let [_, _, yaw] = regolith::series::roll_pitch_yaw_deg(st.rotation);
+    let [_, _, yaw] = regolith::output::series::roll_pitch_yaw_deg(st.rotation);
     eprintln!("skid steering: yaw {yaw:.2}°, yaw rate {:.3} rad/s", st.angvel[2]);
     assert!(yaw > 3.0, "the rover must turn left (yaw {yaw}°)");
 }

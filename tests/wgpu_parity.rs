@@ -12,8 +12,9 @@
 mod common;
 
 use rand::{Rng, SeedableRng};
-use regolith::gpu::device;
-use regolith::run::{RunOptions, run_scene, scene_terrain};
+use regolith::build::backend::device;
+use regolith::build::scene_terrain;
+use regolith::run::{RunOptions, run_scene};
 use regolith::scene::{Backend, Precision, Scene};
 use regolith_fsi::config::TimeStep;
 use regolith_fsi::cpu::CpuSph;
@@ -435,7 +436,7 @@ fn auto_says_which_backend_it_chose() {
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
     // Lavapipe is a software adapter: auto keeps the CPU unless a real GPU exists.
-    let real = regolith::gpu::real_gpu().is_some();
+    let real = regolith::build::backend::real_gpu().is_some();
     assert_eq!(s["backend"], if real { "wgpu" } else { "cpu" }, "{line}");
     assert!(line.contains(if real { "wgpu" } else { "cpu" }), "{line}");
 }

@@ -23,7 +23,7 @@ pub enum CouplingError {
     /// A mesh cannot be used for markers.
     #[error("{0}")]
     Mesh(String),
-    /// The soil solver rejected its inputs.
-    #[error("soil solver: {0}")]
-    Solver(regolith_fsi::SolverError),
+    /// The soil solver rejected its inputs (the solver's error is the source).
+    #[error("soil solver")]
+    Solver(#[source] regolith_fsi::SolverError),
 }

@@ -70,6 +70,11 @@ impl Pose {
     pub fn compose(&self, other: &Pose) -> Pose {
         Pose { translation: self.apply(other.translation), rotation: quat_mul(self.rotation, other.rotation) }
     }
+    /// The point `p` (world) in this pose's frame: the inverse of [`Pose::apply`].
+    pub fn to_local(&self, p: [f64; 3]) -> [f64; 3] {
+        let [x, y, z, w] = self.rotation;
+        quat_rotate([-x, -y, -z, w], [0, 1, 2].map(|k| p[k] - self.translation[k]))
+    }
 }
 
 /// Rotates `v` by the unit quaternion `q = [x, y, z, w]`.
@@ -508,5 +513,15 @@ mod tests {
         let cube = unit_cube();
         assert!((cube.volume() - 1.0).abs() < 1e-12);
         assert!((ShapeDesc::Box { size: [1.0, 2.0, 3.0] }.volume() - 6.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn to_local_undoes_apply() {
+        let p = Pose::from_rpy_deg([0.3, -0.2, 1.0], [10.0, 20.0, 30.0]);
+        let x = [0.1, 0.2, 0.3];
+        let back = p.to_local(p.apply(x));
+        for k in 0..3 {
+            assert!((back[k] - x[k]).abs() < 1e-12, "{back:?}");
+        }
     }
 }

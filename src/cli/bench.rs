@@ -42,7 +42,8 @@ pub(super) fn run(
             BackendArg::Wgpu => scene::Backend::Wgpu,
         };
         scene.precision_set = true;
-        let chosen = crate::gpu::resolve_backend(&mut scene).map_err(|m| InputError::flag("--backend", m))?;
+        let chosen =
+            crate::build::backend::resolve_backend(&mut scene).map_err(|m| InputError::flag("--backend", m))?;
         eprintln!("{chosen}");
         let r = run_bench(&scene, m, warmup, steps).context("bench run failed")?;
         println!(
@@ -63,7 +64,7 @@ pub(super) fn run(
         results.push(r);
     }
     if let Some(p) = json {
-        crate::run::write_json(p, &results).context("writing bench json")?;
+        crate::output::write_json(p, &results).context("writing bench json")?;
     }
     Ok(())
 }

@@ -7,10 +7,10 @@ use regolith_fsi::Real;
 
 use super::{Failure, Precision, TestArg};
 use crate::element::{Control, ElementError, ElementSpec, ElementTest, run_element};
-use crate::element_plot::element_figure;
 use crate::input::InputError;
 use crate::material::{build_material, load_material_file};
-use crate::plot::write_figure;
+use crate::output::element_plot::element_figure;
+use crate::output::write_figure;
 
 pub(super) struct Args {
     pub material: PathBuf,

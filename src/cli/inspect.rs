@@ -4,7 +4,7 @@ use std::path::Path;
 
 use super::Failure;
 use crate::input::InputError;
-use crate::record::topics;
+use crate::output::record::topics;
 
 pub(super) fn run(path: &Path) -> Result<(), Failure> {
     let bytes = std::fs::read(path).map_err(|e| InputError::file(path, format!("cannot read: {e}")))?;

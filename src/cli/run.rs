@@ -30,7 +30,7 @@ pub(super) fn run(
         };
         scene.precision_set = true;
     }
-    let chosen = crate::gpu::resolve_backend(&mut scene).map_err(|m| InputError::flag("--backend", m))?;
+    let chosen = crate::build::backend::resolve_backend(&mut scene).map_err(|m| InputError::flag("--backend", m))?;
     if !quiet {
         println!("{chosen}");
     }
@@ -54,10 +54,12 @@ pub(super) fn run(
     // Ctrl-C stops the run at the next exchange; the outputs (and the recording) are finished.
     // A second handler cannot be installed (e.g. the CLI called twice in one process): the run
     // then simply has no graceful stop, which is not worth failing it for.
-    let _ = ctrlc::set_handler(crate::run::request_stop);
+    let _ = ctrlc::set_handler(crate::driver::request_stop);
     let opts = RunOptions { out: out.clone(), quiet };
     let summary = run_scene(&scene, &opts).map_err(|e| match e {
-        crate::run::RunError::Interrupted { .. } => Failure::Interrupted(format!("{e}; outputs in {}", out.display())),
+        crate::driver::RunError::Interrupted { .. } => {
+            Failure::Interrupted(format!("{e}; outputs in {}", out.display()))
+        }
         e => Failure::Run(anyhow::Error::new(e).context(format!(
             "run of {} failed (outputs written to {})",
             path.display(),

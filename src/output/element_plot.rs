@@ -5,8 +5,8 @@
 use regolith_fsi::Real;
 use regolith_fsi::rheology::{Material, P_REF, Rheology};
 
+use super::plot::{Figure, Panel, Series};
 use crate::element::ElementPath;
-use crate::plot::{Figure, Panel, Series};
 
 fn ellipse(m: f64, pc: f64) -> Vec<(f64, f64)> {
     (0..=200)

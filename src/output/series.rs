@@ -11,7 +11,8 @@ use std::path::Path;
 
 use regolith_fsi::Real;
 
-use crate::run::RunError;
+use crate::driver::{Observer, RunError, RunStats};
+use crate::scene::VehicleSpec;
 use crate::sim::{Body, Simulation};
 
 /// Rows of a time series.
@@ -37,7 +38,7 @@ pub fn roll_pitch_yaw_deg(q: [f64; 4]) -> [f64; 3] {
 
 /// A vehicle's quantities: `x, y, z, roll, pitch, yaw, speed` of the root link, then
 /// `<wheel link>.slip, .sinkage, .omega` per wheel.
-pub fn vehicle_columns(v: &crate::scene::VehicleSpec) -> Vec<String> {
+pub fn vehicle_columns(v: &VehicleSpec) -> Vec<String> {
     let mut c: Vec<String> = VEHICLE_COLUMNS.iter().map(|s| s.to_string()).collect();
     for w in &v.wheels {
         for q in ["slip", "sinkage", "omega"] {
@@ -113,7 +114,7 @@ impl Series {
 
     /// Writes the CSV.
     pub fn write(&self, path: &Path) -> Result<(), RunError> {
-        let io = |e: std::io::Error| RunError::Output { path: path.to_path_buf(), message: e.to_string() };
+        let io = |e: std::io::Error| RunError::output(path, e);
         let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
         writeln!(w, "{}", self.columns.join(",")).map_err(io)?;
         for r in &self.rows {
@@ -121,5 +122,28 @@ impl Series {
             writeln!(w, "{}", line.join(",")).map_err(io)?;
         }
         w.flush().map_err(io)
+    }
+}
+
+/// The series of a terrain scene without a rig: bodies and vehicles, then the soil's largest
+/// speed and kinetic energy (how a bed settles), one row at the start and one per exchange.
+#[derive(Clone, Debug, Default)]
+pub struct TerrainSeries(pub Series);
+
+impl TerrainSeries {
+    /// Soil columns after the bodies' and vehicles'.
+    pub const SOIL_COLUMNS: [&str; 2] = ["soil.max_speed", "soil.kinetic_energy"];
+}
+
+impl<T: Real> Observer<T> for TerrainSeries {
+    fn begin(&mut self, sim: &Simulation<T>, _label: Option<f64>) -> Result<(), RunError> {
+        self.0 = Series::new(sim, false, &Self::SOIL_COLUMNS);
+        self.0.push(sim, None, &[0.0, sim.soil_kinetic_energy()]);
+        Ok(())
+    }
+
+    fn after_step(&mut self, sim: &Simulation<T>, stats: &RunStats) -> Result<(), RunError> {
+        self.0.push(sim, None, &[stats.last_speed, sim.soil_kinetic_energy()]);
+        Ok(())
     }
 }

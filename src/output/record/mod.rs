@@ -29,7 +29,9 @@ use std::path::{Path, PathBuf};
 use regolith_fsi::Real;
 use serde_json::Value;
 
-use crate::run::{RunError, particle_row};
+use super::particles::particle_row;
+use super::series::{vehicle_columns, vehicle_values};
+use crate::driver::{Observer, RunError, RunStats};
 use crate::scene::OutputSpec;
 use crate::sim::Simulation;
 
@@ -81,7 +83,7 @@ impl std::fmt::Debug for Recorder {
 impl Recorder {
     /// Creates `path` and registers the topics.
     pub fn create(path: &Path, spec: &OutputSpec) -> Result<Self, RunError> {
-        let err = |e: &dyn std::fmt::Display| RunError::Output { path: path.to_path_buf(), message: e.to_string() };
+        let err = |e: &dyn std::fmt::Display| RunError::output(path, e.to_string());
         let file = File::create(path).map_err(|e| err(&e))?;
         let mut w = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
@@ -122,7 +124,7 @@ impl Recorder {
     }
 
     fn io(&self, e: &dyn std::fmt::Display) -> RunError {
-        RunError::Output { path: self.path.clone(), message: e.to_string() }
+        RunError::output(&self.path, e.to_string())
     }
 
     fn write(&mut self, channel: u16, t: f64, msg: &Value) -> Result<(), RunError> {
@@ -137,10 +139,9 @@ impl Recorder {
         self.sequence = self.sequence.wrapping_add(1);
         self.last = self.last.max(t);
         let Some(w) = self.writer.as_mut() else {
-            return Err(RunError::Output { path: self.path.clone(), message: "recording already finished".into() });
+            return Err(RunError::output(&self.path, "recording already finished"));
         };
-        w.write_to_known_channel(&header, &data)
-            .map_err(|e| RunError::Output { path: self.path.clone(), message: e.to_string() })
+        w.write_to_known_channel(&header, &data).map_err(|e| RunError::output(&self.path, e))
     }
 
     /// Starts a run (the first, or the next run of a rig): publishes the shapes and the frame at
@@ -227,12 +228,6 @@ impl Recorder {
         data
     }
 
-    /// Records a rig's quantities with the frame the last step took (nothing when it took
-    /// none) on `/rig/<kind>`. The field names must not change within a recording.
-    pub fn rig<T: Real>(&mut self, sim: &Simulation<T>, kind: &str, fields: &[(&str, f64)]) -> Result<(), RunError> {
-        self.values(sim, &format!("/rig/{kind}"), &format!("regolith.Rig.{kind}"), fields)
-    }
-
     /// Records named numbers on `topic` (schema `title`, made from the field names) with the
     /// frame the last step took, if it took one.
     pub fn values<T: Real>(
@@ -249,13 +244,16 @@ impl Recorder {
         let channel = match self.channels.rigs.get(topic) {
             Some((id, known)) if *known == names => *id,
             Some(_) => {
-                return Err(RunError::Build(format!("topic {topic} changed its fields within a recording")));
+                return Err(RunError::output(
+                    &self.path,
+                    format!("topic {topic} changed its fields within a recording"),
+                ));
             }
             None => {
                 let refs: Vec<&str> = fields.iter().map(|(n, _)| *n).collect();
                 let schema = serde_json::to_vec(&foxglove::values_schema(title, &refs)).map_err(|e| self.io(&e))?;
                 let path = self.path.clone();
-                let err = |e: mcap::McapError| RunError::Output { path: path.clone(), message: e.to_string() };
+                let err = |e: mcap::McapError| RunError::output(&path, e);
                 let Some(w) = self.writer.as_mut() else { return Ok(()) };
                 let sid = w.add_schema(title, "jsonschema", &schema).map_err(err)?;
                 let id = w.add_channel(sid, topic, "json", &BTreeMap::new()).map_err(err)?;
@@ -282,6 +280,46 @@ impl Recorder {
             std::io::Write::flush(&mut inner).map_err(|e| self.io(&e))?;
         }
         Ok(())
+    }
+}
+
+impl Recorder {
+    /// Records every vehicle's pose, speed and wheel states on `/vehicles/<name>` with the
+    /// frame the last step took, if it took one.
+    fn vehicles<T: Real>(&mut self, sim: &Simulation<T>) -> Result<(), RunError> {
+        for (vi, v) in sim.scene.vehicles.iter().enumerate() {
+            let names = vehicle_columns(v);
+            let values = vehicle_values(sim, vi);
+            let fields: Vec<(&str, f64)> = names.iter().map(String::as_str).zip(values).collect();
+            self.values(sim, &format!("/vehicles/{}", v.name), "regolith.Vehicle", &fields)?;
+        }
+        Ok(())
+    }
+}
+
+impl<T: Real> Observer<T> for Recorder {
+    fn begin(&mut self, sim: &Simulation<T>, label: Option<f64>) -> Result<(), RunError> {
+        self.begin_run(sim, label)?;
+        self.vehicles(sim)
+    }
+
+    fn after_step(&mut self, sim: &Simulation<T>, _stats: &RunStats) -> Result<(), RunError> {
+        Recorder::after_step(self, sim)?;
+        self.vehicles(sim)
+    }
+
+    fn values(
+        &mut self,
+        sim: &Simulation<T>,
+        topic: &str,
+        title: &str,
+        fields: &[(&str, f64)],
+    ) -> Result<(), RunError> {
+        Recorder::values(self, sim, topic, title, fields)
+    }
+
+    fn finish(&mut self) -> Result<(), RunError> {
+        Recorder::finish(self)
     }
 }
 

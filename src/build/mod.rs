@@ -1,0 +1,225 @@
+//! Scene → the objects that simulate it: materials in the run's precision, the terrain
+//! (soil particles, wall markers, domain), the rapier world with the container, bodies and
+//! vehicle joints, each FSI body's BCE markers, and the soil solver on the chosen backend.
+//!
+//! This is the second stage of a run (after [`crate::scene`] has validated the files); it knows
+//! nothing of stepping or outputs. [`assemble`] is what [`crate::sim::Simulation::new`] calls.
+
+pub mod backend;
+mod bodies;
+mod surface;
+mod vehicles;
+
+pub use bodies::carve_bodies;
+pub use surface::SurfaceGrid;
+pub use vehicles::{build_vehicle_joints, place_vehicles};
+
+use regolith_coupling::{CouplingError, FsiSystem, SoilInit, shape_markers};
+use regolith_fsi::rheology::{Material, ParamError};
+use regolith_fsi::{Real, SolverError, SphSolver};
+use regolith_rigid::{BodyId, JointId, Motion, RigidError, RigidWorld};
+use regolith_terrain::{RegionSpec, TerrainBuild, TerrainError, build_terrain};
+
+use crate::input::InputError;
+use crate::scene::{Backend, Scene};
+
+/// Why a scene could not be built. Displays as one line; the wrapped error, if any, is the
+/// [`std::error::Error::source`].
+#[derive(Debug, thiserror::Error)]
+pub enum BuildError {
+    /// The scene file itself is wrong (from [`crate::sim::Simulation::load`]).
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// A material's parameters are inconsistent.
+    #[error(transparent)]
+    Material(#[from] ParamError),
+    /// The terrain generator refused the regions.
+    #[error(transparent)]
+    Terrain(#[from] TerrainError),
+    /// A body, joint or wall was refused by the rigid world (`key`: the scene key it came from).
+    #[error("{key}")]
+    Rigid {
+        /// Scene key (`bodies[1]`, `vehicles[0]`, `rig`).
+        key: String,
+        /// What rapier's side said.
+        #[source]
+        source: RigidError,
+    },
+    /// A body's BCE markers could not be generated.
+    #[error("{key}")]
+    Markers {
+        /// Scene key.
+        key: String,
+        /// What the marker generator said.
+        #[source]
+        source: CouplingError,
+    },
+    /// The coupled system refused its inputs.
+    #[error(transparent)]
+    Coupling(#[from] CouplingError),
+    /// The soil solver refused its inputs.
+    #[error(transparent)]
+    Solver(#[from] SolverError),
+    /// Terrain scenes need a container.
+    #[error("a scene needs a [container]")]
+    NoContainer,
+    /// Every soil particle started inside a body.
+    #[error("the bodies fill all the soil")]
+    NoSoilLeft,
+    /// A vehicle to be lowered onto the soil is not over it.
+    #[error("{key}: vehicle \"{name}\" is not over the soil: place it over the terrain or give position = [x, y, z]")]
+    VehicleOffSoil {
+        /// Scene key.
+        key: String,
+        /// Vehicle name.
+        name: String,
+    },
+    /// A rig body is not over the soil.
+    #[error("no soil under ({x}, {y}): place the rig body over the soil")]
+    NoSoilUnder {
+        /// x (m).
+        x: f64,
+        /// y (m).
+        y: f64,
+    },
+    /// A rig's body has a shape the rig cannot use.
+    #[error("{rig} rig body must be {allowed}")]
+    RigShape {
+        /// Rig type.
+        rig: &'static str,
+        /// Shapes allowed.
+        allowed: &'static str,
+    },
+    /// A scripting call named a vehicle the scene does not have.
+    #[error("no vehicle \"{0}\"")]
+    UnknownVehicle(String),
+    /// A scripting call gave a drive that cannot be applied.
+    #[error("vehicle \"{vehicle}\": {message}")]
+    InvalidDrive {
+        /// Vehicle name.
+        vehicle: String,
+        /// What is allowed.
+        message: String,
+    },
+}
+
+impl BuildError {
+    fn rigid(key: &str) -> impl FnOnce(RigidError) -> Self + '_ {
+        move |source| Self::Rigid { key: key.to_string(), source }
+    }
+}
+
+/// A built terrain simulation (soil only, bodies ignored).
+pub struct SoilModel<T: Real> {
+    /// The SPH solver (the scene's backend).
+    pub solver: Box<dyn SphSolver<T>>,
+    /// What the terrain generator produced (container, domain, notes).
+    pub terrain: TerrainBuild,
+}
+
+/// A scene's materials in precision `T` and its terrain (soil particles, wall markers,
+/// domain), as generated from its soil regions.
+pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, TerrainBuild), BuildError> {
+    let mats64: Vec<Material<f64>> = scene.materials.iter().map(|m| m.params.build()).collect::<Result<_, _>>()?;
+    let mats: Vec<Material<T>> = scene.materials.iter().map(|m| m.params.build()).collect::<Result<_, _>>()?;
+    let container = scene.container.ok_or(BuildError::NoContainer)?;
+    let regions: Vec<RegionSpec> =
+        scene.soil.iter().map(|s| RegionSpec { region: s.region.clone(), material: s.material as u16 }).collect();
+    let terrain = build_terrain(
+        &container,
+        scene.solver.spacing,
+        scene.solver.bce_layers,
+        scene.solver.gravity,
+        &regions,
+        &mats64,
+    )?;
+    Ok((mats, terrain))
+}
+
+/// Builds the soil solver of a terrain scene (bodies ignored) in precision `T`.
+pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, BuildError> {
+    let (mats, terrain) = scene_terrain::<T>(scene)?;
+    let wgpu = scene.backend == Backend::Wgpu;
+    let solver = backend::make_solver(wgpu, scene.solver, mats, &terrain.particles, &terrain.markers, terrain.domain)?;
+    Ok(SoilModel { solver, terrain })
+}
+
+/// Everything a [`crate::sim::Simulation`] is made of.
+pub struct Assembly<T: Real> {
+    /// The coupled system.
+    pub system: FsiSystem<T>,
+    /// The scene as built (vehicles lowered onto the soil).
+    pub scene: Scene,
+    /// What the terrain generator produced, less the soil carved out of bodies.
+    pub terrain: TerrainBuild,
+    /// Rapier-side id of each scene body.
+    pub ids: Vec<BodyId>,
+    /// Index among the FSI bodies of each scene body (`None`: no markers).
+    pub fsi: Vec<Option<usize>>,
+    /// Per vehicle: the rapier joint of each model joint.
+    pub vehicle_joints: Vec<Vec<Option<JointId>>>,
+    /// The initial soil surface (for sinkage).
+    pub surface0: SurfaceGrid,
+}
+
+/// Builds a validated scene: terrain, carving, the rigid world (container walls, bodies,
+/// vehicle joints), the FSI bodies' markers and the soil solver on the scene's backend.
+pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
+    let (mats, terrain) = scene_terrain::<T>(scene)?;
+    let d0 = scene.solver.spacing;
+    let surface0 = SurfaceGrid::new(terrain.particles.iter().map(|p| p.pos), d0);
+    let mut scene = scene.clone();
+    place_vehicles(&mut scene, &surface0)?;
+    let mut terrain = terrain;
+    carve_bodies(&scene, &mut terrain);
+    if terrain.particles.is_empty() {
+        return Err(BuildError::NoSoilLeft);
+    }
+    let mut rigid = RigidWorld::new(scene.solver.gravity);
+    bodies::add_container(&mut rigid, &terrain, d0)?;
+    let (mut lo, mut hi) = terrain.domain;
+    let mut ids = Vec::new();
+    let mut fsi_bodies = Vec::new();
+    let mut fsi = Vec::new();
+    for b in &scene.bodies {
+        let id = rigid.add_body(&b.desc).map_err(BuildError::rigid(&b.key))?;
+        ids.push(id);
+        if !b.fsi {
+            fsi.push(None);
+            continue;
+        }
+        let local = shape_markers(&b.desc.shape, d0, b.bce_layers)
+            .map_err(|source| BuildError::Markers { key: b.key.clone(), source })?;
+        fsi.push(Some(fsi_bodies.len()));
+        fsi_bodies.push((id, local));
+        // The neighbour grid must cover the body where it starts and, if prescribed, where it
+        // ends.
+        let r = b.desc.shape.bounding_radius() + 2.0 * scene.solver.h();
+        let p = b.desc.pose.translation;
+        let mut ends = vec![p];
+        if let Motion::Prescribed { linvel, .. } = b.desc.motion {
+            ends.push([0, 1, 2].map(|k| p[k] + linvel[k] * scene.end_time));
+        }
+        for e in ends {
+            for k in 0..3 {
+                lo[k] = lo[k].min(e[k] - r);
+                hi[k] = hi[k].max(e[k] + r);
+            }
+        }
+    }
+    let mut vehicle_joints = Vec::new();
+    for v in &scene.vehicles {
+        vehicle_joints.push(build_vehicle_joints(&mut rigid, v, &scene.bodies, &ids)?);
+    }
+    let soil = SoilInit {
+        config: scene.solver,
+        materials: mats,
+        particles: &terrain.particles,
+        wall_markers: &terrain.markers,
+        domain: (lo, hi),
+    };
+    let wgpu = scene.backend == Backend::Wgpu;
+    let make = |c, m, p: &[_], mk: &[_], d| backend::make_solver::<T>(wgpu, c, m, p, mk, d);
+    let system = FsiSystem::with_solver(soil, rigid, fsi_bodies, scene.exchange_interval, &make)?;
+    Ok(Assembly { system, scene, terrain, ids, fsi, vehicle_joints, surface0 })
+}

@@ -1,0 +1,59 @@
+//! The soil surface height on a coarse grid, from the initial particles: where vehicles are
+//! lowered to and what wheel sinkage is measured from.
+
+/// The soil surface height on a grid of cells of one spacing: the top of the highest
+/// particle's cell in each column.
+#[derive(Clone, Debug)]
+pub struct SurfaceGrid {
+    origin: [f64; 2],
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    top: Vec<f64>,
+}
+
+impl SurfaceGrid {
+    /// From particle centres with spacing `d0`.
+    pub fn new(points: impl Iterator<Item = [f64; 3]> + Clone, d0: f64) -> Self {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in points.clone() {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        if !lo[0].is_finite() {
+            return Self { origin: [0.0; 2], cell: d0, nx: 0, ny: 0, top: Vec::new() };
+        }
+        let origin = [lo[0] - 0.5 * d0, lo[1] - 0.5 * d0];
+        let nx = ((hi[0] - origin[0]) / d0).floor() as usize + 1;
+        let ny = ((hi[1] - origin[1]) / d0).floor() as usize + 1;
+        let mut top = vec![f64::NEG_INFINITY; nx * ny];
+        for p in points {
+            let i = (((p[0] - origin[0]) / d0) as usize).min(nx - 1);
+            let j = (((p[1] - origin[1]) / d0) as usize).min(ny - 1);
+            top[j * nx + i] = top[j * nx + i].max(p[2] + 0.5 * d0);
+        }
+        Self { origin, cell: d0, nx, ny, top }
+    }
+
+    /// Highest surface within `r` of `(x, y)` (`None` off the soil).
+    pub fn height(&self, x: f64, y: f64, r: f64) -> Option<f64> {
+        if self.nx == 0 {
+            return None;
+        }
+        let idx = |v: f64, o: f64, n: usize| ((v - o) / self.cell).floor().clamp(0.0, (n - 1) as f64) as usize;
+        let (i0, i1) = (idx(x - r, self.origin[0], self.nx), idx(x + r, self.origin[0], self.nx));
+        let (j0, j1) = (idx(y - r, self.origin[1], self.ny), idx(y + r, self.origin[1], self.ny));
+        if x + r < self.origin[0] || y + r < self.origin[1] {
+            return None;
+        }
+        let mut best = f64::NEG_INFINITY;
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                best = best.max(self.top[j * self.nx + i]);
+            }
+        }
+        best.is_finite().then_some(best)
+    }
+}

@@ -1,0 +1,80 @@
+//! Vehicles in the rigid world: lowered onto the soil, their URDF joints built with wheel
+//! motors and limits.
+
+use regolith_rigid::{BodyId, JointDesc, JointId, RigidWorld};
+
+use super::{BuildError, SurfaceGrid};
+use crate::scene::{BodySpec, Scene, VehicleSpec};
+
+/// Lowers every vehicle without a given height so that its lowest collision point sits one
+/// spacing above the top soil particle's centre below it (the contact distance of markers and
+/// soil), as the rigs place their bodies.
+pub fn place_vehicles(scene: &mut Scene, surface: &SurfaceGrid) -> Result<(), BuildError> {
+    let d0 = scene.solver.spacing;
+    for v in scene.vehicles.clone() {
+        if !v.place_on_soil {
+            continue;
+        }
+        let mut lift = f64::NEG_INFINITY;
+        for li in 0..v.model.links.len() {
+            let b = &scene.bodies[v.body(li)];
+            let low = b.desc.shape.lowest_z(&b.desc.pose);
+            if !low.is_finite() {
+                continue;
+            }
+            let t = b.desc.pose.translation;
+            if let Some(top) = surface.height(t[0], t[1], b.desc.shape.bounding_radius()) {
+                lift = lift.max(top + 0.5 * d0 - low);
+            }
+        }
+        if !lift.is_finite() {
+            return Err(BuildError::VehicleOffSoil { key: v.key.clone(), name: v.name.clone() });
+        }
+        for li in 0..v.model.links.len() {
+            scene.bodies[v.body(li)].desc.pose.translation[2] += lift;
+        }
+    }
+    Ok(())
+}
+
+/// Builds a vehicle's joints between its link bodies (`bodies[i]` added to `rigid` as
+/// `ids[i]`, at their current poses), with wheel velocity motors (target 0 until driven) and
+/// joint limits. Returns the rapier joint of each model joint.
+pub fn build_vehicle_joints(
+    rigid: &mut RigidWorld,
+    v: &VehicleSpec,
+    bodies: &[BodySpec],
+    ids: &[BodyId],
+) -> Result<Vec<Option<JointId>>, BuildError> {
+    use regolith_vehicles::JointType;
+    let mut out = Vec::with_capacity(v.model.joints.len());
+    for (ji, j) in v.model.joints.iter().enumerate() {
+        let child = &bodies[v.body(j.child)].desc.pose;
+        let kind = match j.kind {
+            JointType::Fixed => regolith_rigid::JointKind::Fixed,
+            JointType::Continuous | JointType::Revolute { .. } => regolith_rigid::JointKind::Revolute,
+            JointType::Prismatic { .. } => regolith_rigid::JointKind::Prismatic,
+        };
+        let driven = v.drive.iter().any(|(d, _)| *d == ji);
+        let desc = JointDesc {
+            name: format!("{}/{}", v.name, j.name),
+            body1: ids[v.body(j.parent)],
+            body2: ids[v.body(j.child)],
+            kind,
+            anchor: child.translation,
+            axis: child.rotate(j.axis),
+            motor: driven.then_some(regolith_rigid::VelocityMotor { target: 0.0, max_effort: v.max_torque }),
+        };
+        let id = rigid.add_joint(&desc).map_err(BuildError::rigid(&v.key))?;
+        match j.kind {
+            JointType::Revolute { lower, upper } | JointType::Prismatic { lower, upper }
+                if lower.is_finite() && upper.is_finite() =>
+            {
+                rigid.set_joint_limits(id, lower, upper);
+            }
+            _ => {}
+        }
+        out.push(Some(id));
+    }
+    Ok(out)
+}

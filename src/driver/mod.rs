@@ -1,0 +1,233 @@
+//! The run loop: steps a [`Simulation`] one exchange interval at a time to an end time, keeps
+//! the counters a summary needs ([`RunStats`]), stops at the next exchange when a
+//! [`StopToken`] is raised (what Ctrl-C does), and hands every step to its [`Observer`]s: the
+//! recording, the series, the progress bar, a rig's report. Observers only read the
+//! simulation; what moves bodies (a rig's carriage, a vehicle's drive) is the caller's.
+
+mod progress;
+
+pub use progress::Progress;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use regolith_fsi::{Real, SolverError};
+
+use crate::build::BuildError;
+use crate::sim::Simulation;
+
+/// Why a run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The scene cannot be built.
+    #[error("building the scene")]
+    Build(#[from] BuildError),
+    /// The solver stopped.
+    #[error("solver")]
+    Solver(#[from] SolverError),
+    /// Writing an output failed.
+    #[error("writing {}", path.display())]
+    Output {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// A stop was requested (Ctrl-C); the outputs up to that point were written.
+    #[error("interrupted (outputs up to t = {time:.4} s were written)")]
+    Interrupted {
+        /// Simulated time reached (s).
+        time: f64,
+    },
+}
+
+impl RunError {
+    /// An output error for `path`.
+    pub fn output(path: &Path, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        Self::Output { path: path.to_path_buf(), source: source.into() }
+    }
+}
+
+/// Asks a run to stop at its next exchange. Clones share the flag.
+#[derive(Clone, Debug, Default)]
+pub struct StopToken(Arc<AtomicBool>);
+
+impl StopToken {
+    /// A fresh, unraised token.
+    pub fn new() -> Self {
+        Self::default()
+    }
+    /// The process-wide token that [`request_stop`] (the CLI's Ctrl-C handler) raises.
+    pub fn global() -> Self {
+        static GLOBAL: std::sync::OnceLock<StopToken> = std::sync::OnceLock::new();
+        GLOBAL.get_or_init(StopToken::new).clone()
+    }
+    /// Raises it.
+    pub fn stop(&self) {
+        self.0.store(true, Ordering::SeqCst);
+    }
+    /// Whether it was raised.
+    pub fn is_stopped(&self) -> bool {
+        self.0.load(Ordering::SeqCst)
+    }
+}
+
+/// Raises the process-wide [`StopToken::global`]: running simulations stop at the next exchange.
+pub fn request_stop() {
+    StopToken::global().stop();
+}
+
+/// What a run did, for the summary.
+#[derive(Clone, Debug)]
+pub struct RunStats {
+    start: Instant,
+    /// Simulated end time of each run (s).
+    pub end_time: f64,
+    /// Soil steps taken.
+    pub steps: u64,
+    /// Soil particles × steps.
+    pub particle_steps: f64,
+    /// Sum of neighbour pairs over steps (for the mean).
+    pub pairs: f64,
+    /// Largest particle speed seen (m/s).
+    pub max_speed_run: f64,
+    /// Largest particle speed at the last step (m/s).
+    pub last_speed: f64,
+    /// Smallest soil step (s).
+    pub dt_min: f64,
+    /// Largest soil step (s).
+    pub dt_max: f64,
+}
+
+impl RunStats {
+    fn new(end_time: f64) -> Self {
+        Self {
+            start: Instant::now(),
+            end_time,
+            steps: 0,
+            particle_steps: 0.0,
+            pairs: 0.0,
+            max_speed_run: 0.0,
+            last_speed: 0.0,
+            dt_min: f64::INFINITY,
+            dt_max: 0.0,
+        }
+    }
+
+    /// Wall-clock time since the run started (s).
+    pub fn elapsed(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+}
+
+/// Something that watches a run: told when each run starts, after every exchange, of the
+/// named quantities a rig publishes, and when everything is done. Every method defaults to
+/// doing nothing.
+pub trait Observer<T: Real> {
+    /// A run starts (the only one, or the next of a rig's runs; `label`: its slip or plate size).
+    fn begin(&mut self, _sim: &Simulation<T>, _label: Option<f64>) -> Result<(), RunError> {
+        Ok(())
+    }
+    /// An exchange interval was stepped.
+    fn after_step(&mut self, _sim: &Simulation<T>, _stats: &RunStats) -> Result<(), RunError> {
+        Ok(())
+    }
+    /// Named quantities of this exchange on `topic` (schema `title`), e.g. a rig's readings.
+    fn values(
+        &mut self,
+        _sim: &Simulation<T>,
+        _topic: &str,
+        _title: &str,
+        _fields: &[(&str, f64)],
+    ) -> Result<(), RunError> {
+        Ok(())
+    }
+    /// Every run is over (also after a failure or a stop).
+    fn finish(&mut self) -> Result<(), RunError> {
+        Ok(())
+    }
+}
+
+/// The run loop with its observers.
+pub struct Driver<'o, T: Real> {
+    /// Counters so far.
+    pub stats: RunStats,
+    stop: StopToken,
+    observers: Vec<&'o mut dyn Observer<T>>,
+}
+
+impl<'o, T: Real> Driver<'o, T> {
+    /// A loop for runs that end at `end_time` (s), stopping when `stop` is raised.
+    pub fn new(end_time: f64, stop: StopToken) -> Self {
+        Self { stats: RunStats::new(end_time), stop, observers: Vec::new() }
+    }
+
+    /// Adds an observer (called in the order added).
+    pub fn observe(&mut self, o: &'o mut dyn Observer<T>) {
+        self.observers.push(o);
+    }
+
+    /// Starts a run of `sim` (`label`: a rig run's slip or plate size).
+    pub fn begin(&mut self, sim: &Simulation<T>, label: Option<f64>) -> Result<(), RunError> {
+        for o in &mut self.observers {
+            o.begin(sim, label)?;
+        }
+        Ok(())
+    }
+
+    /// Whether `sim` has reached the end time.
+    pub fn done(&self, sim: &Simulation<T>) -> bool {
+        sim.time() >= self.stats.end_time * (1.0 - 1e-12)
+    }
+
+    /// Advances `sim` by one exchange interval (at most to the end time) and tells the observers.
+    pub fn step(&mut self, sim: &mut Simulation<T>) -> Result<(), RunError> {
+        if self.stop.is_stopped() {
+            return Err(RunError::Interrupted { time: sim.time() });
+        }
+        let remaining = self.stats.end_time - sim.time();
+        let r = sim.step_max(Some(remaining))?;
+        let n = sim.system.fluid.active() as f64;
+        let s = &mut self.stats;
+        s.steps += u64::from(r.fluid_steps);
+        s.particle_steps += n * f64::from(r.fluid_steps);
+        s.pairs += r.pairs as f64 * f64::from(r.fluid_steps);
+        s.last_speed = r.max_speed;
+        s.dt_min = s.dt_min.min(r.dt_min);
+        s.dt_max = s.dt_max.max(r.dt_max);
+        s.max_speed_run = s.max_speed_run.max(r.max_speed);
+        for o in &mut self.observers {
+            o.after_step(sim, &self.stats)?;
+        }
+        Ok(())
+    }
+
+    /// Publishes named quantities of the current exchange to every observer.
+    pub fn publish(
+        &mut self,
+        sim: &Simulation<T>,
+        topic: &str,
+        title: &str,
+        fields: &[(&str, f64)],
+    ) -> Result<(), RunError> {
+        for o in &mut self.observers {
+            o.values(sim, topic, title, fields)?;
+        }
+        Ok(())
+    }
+
+    /// Tells every observer that the runs are over; the first error wins, but all are told.
+    pub fn finish(&mut self) -> Result<(), RunError> {
+        let mut first = Ok(());
+        for o in &mut self.observers {
+            let r = o.finish();
+            if first.is_ok() {
+                first = r;
+            }
+        }
+        first
+    }
+}

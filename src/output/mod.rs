@@ -1,0 +1,17 @@
+//! What a run leaves behind: `particles_final.csv`, `series.csv`, `recording.mcap`, JSON
+//! files and PNG/SVG plots. The series and the recording are [`crate::driver::Observer`]s of
+//! the run loop; the rest is written once at the end.
+
+pub mod element_plot;
+pub mod figures;
+pub mod json;
+pub mod particles;
+pub mod plot;
+pub mod record;
+pub mod series;
+
+pub use json::write_json;
+pub use particles::{ParticleRow, particle_row, write_particles_csv};
+pub use plot::{Figure, Panel, PlotError, write_figure};
+pub use record::Recorder;
+pub use series::{Series, TerrainSeries};

@@ -1,0 +1,228 @@
+//! Single-wheel rig: a wheel on a motorised axle, its carriage driven at `v = ωR(1 − s)` for
+//! each slip of a list (or towed by a force); drawbar pull, torque and sinkage.
+
+use regolith_fsi::Real;
+use regolith_rigid::{BodyDesc, JointDesc, JointKind, MassSpec, Motion, Pose, ShapeDesc, VelocityMotor};
+use serde::Serialize;
+
+use super::{RigOutput, place_on_soil};
+use crate::build::BuildError;
+use crate::driver::{Driver, RunError};
+use crate::output::Series;
+use crate::scene::{Scene, WheelDrive};
+use crate::sim::{Body, Simulation};
+
+/// Steady-state means of one wheel run.
+#[derive(Clone, Debug, Serialize)]
+struct WheelRun {
+    /// Prescribed slip (slip mode) or the measured mean slip (tow mode).
+    slip: f64,
+    /// Mean measured slip `1 − v / (ω R)` over the second half.
+    measured_slip: f64,
+    /// Mean drawbar pull: the soil's horizontal force on the wheel along travel (N).
+    drawbar_pull: f64,
+    /// Mean driving torque: minus the soil's torque about the axle (N m).
+    torque: f64,
+    /// Mean sinkage of the wheel centre from its start (m).
+    sinkage: f64,
+}
+
+pub(super) fn wheel<T: Real>(
+    scene: &Scene,
+    body: usize,
+    load: f64,
+    omega: f64,
+    drive: &WheelDrive,
+    driver: &mut Driver<'_, T>,
+) -> Result<RigOutput<T>, RunError> {
+    let g = -scene.solver.gravity[2];
+    let radius = match scene.bodies[body].desc.shape {
+        ShapeDesc::Wheel { radius, .. } | ShapeDesc::Cylinder { radius, .. } => radius,
+        _ => return Err(BuildError::RigShape { rig: "wheel", allowed: "a wheel" }.into()),
+    };
+    let slips: Vec<Option<f64>> = match drive {
+        WheelDrive::Slips(s) => s.iter().map(|x| Some(*x)).collect(),
+        WheelDrive::Tow(_) => vec![None],
+    };
+    let multi = slips.len() > 1;
+    let mut series: Option<Series> = None;
+    let mut runs = Vec::new();
+    let mut last: Option<Simulation<T>> = None;
+    for slip in slips {
+        let mut sc = scene.clone();
+        sc.bodies[body].desc.motion = Motion::Free;
+        place_on_soil(&mut sc, body)?;
+        let centre = sc.bodies[body].desc.pose.translation;
+        let wheel_mass = sc.bodies[body].desc.mass.mass_of(&sc.bodies[body].desc.shape);
+        let mut sim = Simulation::<T>::new(&sc)?;
+        let wheel_id = sim.rigid_id(Body(body));
+        let v = slip.map_or(0.0, |s| omega * radius * (1.0 - s));
+        let small = |name: &str, motion: Motion| BodyDesc {
+            name: name.into(),
+            shape: ShapeDesc::Box { size: [0.05, 0.05, 0.05] },
+            mass: MassSpec::Mass(1.0),
+            pose: Pose::translation(centre),
+            motion,
+            friction: 0.0,
+            collides: false,
+        };
+        let rig_err = |source| RunError::Build(BuildError::Rigid { key: "rig".into(), source });
+        let rigid = &mut sim.system.rigid;
+        // sled (moves along x) —prismatic z→ carriage —revolute y→ wheel
+        let sled = match drive {
+            WheelDrive::Slips(_) => rigid
+                .add_body(&small("rig sled", Motion::Prescribed { linvel: [v, 0.0, 0.0], angvel: [0.0; 3] }))
+                .map_err(rig_err)?,
+            WheelDrive::Tow(f) => {
+                let rail = rigid.add_body(&small("rig rail", Motion::Fixed)).map_err(rig_err)?;
+                let sled = rigid.add_body(&small("rig sled", Motion::Free)).map_err(rig_err)?;
+                rigid
+                    .add_joint(&JointDesc {
+                        name: "rig rail".into(),
+                        body1: rail,
+                        body2: sled,
+                        kind: JointKind::Prismatic,
+                        anchor: centre,
+                        axis: [1.0, 0.0, 0.0],
+                        motor: None,
+                    })
+                    .map_err(rig_err)?;
+                rigid.set_extra_force(sled, [-f, 0.0, 0.0]);
+                sled
+            }
+        };
+        let carriage = rigid.add_body(&small("rig carriage", Motion::Free)).map_err(rig_err)?;
+        // The carriage carries the rest of the load: total vertical load on the soil = `load`.
+        let extra = load - (wheel_mass + rigid.mass(carriage)) * g;
+        rigid.set_extra_force(carriage, [0.0, 0.0, -extra]);
+        rigid
+            .add_joint(&JointDesc {
+                name: "rig vertical".into(),
+                body1: sled,
+                body2: carriage,
+                kind: JointKind::Prismatic,
+                anchor: centre,
+                axis: [0.0, 0.0, 1.0],
+                motor: None,
+            })
+            .map_err(rig_err)?;
+        rigid
+            .add_joint(&JointDesc {
+                name: "rig axle".into(),
+                body1: carriage,
+                body2: wheel_id,
+                kind: JointKind::Revolute,
+                anchor: centre,
+                axis: [0.0, 1.0, 0.0],
+                motor: Some(VelocityMotor { target: omega, max_effort: 1.0e5 }),
+            })
+            .map_err(rig_err)?;
+        let label = slip.unwrap_or(f64::NAN);
+        let s = series.get_or_insert_with(|| Series::new(&sim, multi, &["slip", "drawbar_pull", "torque", "sinkage"]));
+        let mut rows: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
+        let names = ["slip", "drawbar_pull", "torque", "sinkage"];
+        let record = |driver: &mut Driver<'_, T>, sim: &Simulation<T>, v: [f64; 4]| {
+            let fields = [(names[0], v[0]), (names[1], v[1]), (names[2], v[2]), (names[3], v[3])];
+            driver.publish(sim, "/rig/wheel", "regolith.Rig.wheel", &fields)
+        };
+        driver.begin(&sim, multi.then_some(label))?;
+        record(driver, &sim, [1.0, 0.0, 0.0, 0.0])?;
+        while sim.time() < sc.end_time * (1.0 - 1e-12) {
+            driver.step(&mut sim)?;
+            let st = sim.body_state(Body(body));
+            let w = sim.fsi_wrench(Body(body));
+            let measured = 1.0 - st.linvel[0] / (omega * radius);
+            let (dbp, torque, sinkage) = (w.force[0], -w.torque[1], centre[2] - st.origin[2]);
+            s.push(&sim, multi.then_some(label), &[measured, dbp, torque, sinkage]);
+            record(driver, &sim, [measured, dbp, torque, sinkage])?;
+            rows.push((sim.time(), measured, dbp, torque, sinkage));
+        }
+        let half: Vec<_> = rows.iter().filter(|r| r.0 >= 0.5 * sc.end_time).collect();
+        let n = half.len().max(1) as f64;
+        let mean = |f: fn(&(f64, f64, f64, f64, f64)) -> f64| half.iter().map(|r| f(r)).sum::<f64>() / n;
+        let measured = mean(|r| r.1);
+        runs.push(WheelRun {
+            slip: slip.unwrap_or(measured),
+            measured_slip: measured,
+            drawbar_pull: mean(|r| r.2),
+            torque: mean(|r| r.3),
+            sinkage: mean(|r| r.4),
+        });
+        last = Some(sim);
+    }
+    let mut figures = Vec::new();
+    let s = series.clone().unwrap_or_default();
+    let col = |name: &str| s.column(name);
+    if let (Some(t), Some(d), Some(q), Some(z)) = (col("time"), col("drawbar_pull"), col("torque"), col("sinkage")) {
+        let run_col = col("run");
+        let mut panels = vec![
+            crate::output::plot::Panel {
+                title: "drawbar pull".into(),
+                x_label: "time (s)".into(),
+                y_label: "DBP (N)".into(),
+                ..Default::default()
+            },
+            crate::output::plot::Panel {
+                title: "driving torque".into(),
+                x_label: "time (s)".into(),
+                y_label: "torque (N m)".into(),
+                ..Default::default()
+            },
+            crate::output::plot::Panel {
+                title: "sinkage".into(),
+                x_label: "time (s)".into(),
+                y_label: "sinkage (mm)".into(),
+                ..Default::default()
+            },
+        ];
+        for r in &runs {
+            let rows: Vec<&Vec<f64>> =
+                s.rows.iter().filter(|row| run_col.is_none_or(|c| (row[c] - r.slip).abs() < 1e-12)).collect();
+            let name = format!("s = {:.2}", r.slip);
+            panels[0].series.push(crate::output::plot::Series::line(
+                name.clone(),
+                rows.iter().map(|row| (row[t], row[d])).collect(),
+            ));
+            panels[1].series.push(crate::output::plot::Series::line(
+                name.clone(),
+                rows.iter().map(|row| (row[t], row[q])).collect(),
+            ));
+            panels[2]
+                .series
+                .push(crate::output::plot::Series::line(name, rows.iter().map(|row| (row[t], row[z] * 1e3)).collect()));
+        }
+        figures.push(("wheel_time".into(), crate::output::plot::Figure { panels }));
+    }
+    if runs.len() > 1 {
+        let dbp = crate::output::plot::Panel {
+            title: "drawbar pull – slip".into(),
+            x_label: "slip".into(),
+            y_label: "drawbar pull (N)".into(),
+            series: vec![crate::output::plot::Series::line(
+                "DBP",
+                runs.iter().map(|r| (r.slip, r.drawbar_pull)).collect(),
+            )],
+            ..Default::default()
+        };
+        let tq = crate::output::plot::Panel {
+            title: "torque – slip".into(),
+            x_label: "slip".into(),
+            y_label: "torque (N m)".into(),
+            series: vec![crate::output::plot::Series::line(
+                "torque",
+                runs.iter().map(|r| (r.slip, r.torque)).collect(),
+            )],
+            ..Default::default()
+        };
+        figures.push(("wheel_slip".into(), crate::output::plot::Figure { panels: vec![dbp, tq] }));
+    }
+    let report = serde_json::json!({
+        "type": "wheel",
+        "load_n": load,
+        "angular_velocity": omega,
+        "radius_m": radius,
+        "drive": match drive { WheelDrive::Slips(_) => serde_json::json!("slip"), WheelDrive::Tow(f) => serde_json::json!({"tow_force": f}) },
+        "steady_state": runs,
+    });
+    Ok(RigOutput { series: series.unwrap_or_default(), report, bekker: None, figures, last })
+}

@@ -1,0 +1,207 @@
+//! Running a scene from end to end, as `regolith run` does: build it, run its rig (or step
+//! the terrain to the end time) through the [`crate::driver`] loop with the recording, series
+//! and progress bar observing, and write `summary.json`, `particles_final.csv`, `series.csv`
+//! and the plots.
+
+mod summary;
+
+pub use summary::{BodySummary, Runout, SUMMARY_SCHEMA_VERSION, Summary};
+
+pub use crate::driver::{RunError, request_stop};
+
+use std::path::PathBuf;
+
+use regolith_fsi::Real;
+
+use crate::driver::{Driver, Progress, StopToken};
+use crate::output::{Recorder, TerrainSeries, figures, write_figure, write_json, write_particles_csv};
+use crate::scene::{Precision, Scene};
+use crate::sim::{Body, Simulation};
+
+/// Options of [`run_scene`].
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Output directory.
+    pub out: PathBuf,
+    /// No progress lines.
+    pub quiet: bool,
+}
+
+/// Runs a scene and writes its outputs. On a solver failure the summary and final particles
+/// are still written (with `nan_detected` / `error` set) before the error is returned; so
+/// they are when [`request_stop`] was called (Ctrl-C), which returns [`RunError::Interrupted`].
+pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError> {
+    match scene.precision {
+        Precision::F32 => run_t::<f32>(scene, opts),
+        Precision::F64 => run_t::<f64>(scene, opts),
+    }
+}
+
+/// What the stepping produced, whichever way the scene ran.
+struct Ran<T: Real> {
+    sim: Option<Simulation<T>>,
+    series: Option<crate::output::Series>,
+    rig: Option<serde_json::Value>,
+    bekker: Option<crate::rig::bekker::BekkerFit>,
+    figures: Vec<(String, crate::output::Figure)>,
+    initial: Option<Vec<[f64; 3]>>,
+}
+
+impl<T: Real> Default for Ran<T> {
+    fn default() -> Self {
+        Self { sim: None, series: None, rig: None, bekker: None, figures: Vec::new(), initial: None }
+    }
+}
+
+fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError> {
+    std::fs::create_dir_all(&opts.out).map_err(|e| RunError::output(&opts.out, e))?;
+    let mut recorder =
+        if scene.output.mcap { Some(Recorder::create(&opts.out.join("recording.mcap"), &scene.output)?) } else { None };
+    let mut progress = Progress::new(opts.quiet);
+    let mut terrain_series = TerrainSeries::default();
+    let mut failure = None;
+    let mut interrupted = None;
+    // A solver error or a stop ends the run with its outputs written; other errors end it at once.
+    let mut stopped = |e: RunError| match e {
+        RunError::Solver(e) => {
+            failure = Some(e);
+            Ok(())
+        }
+        RunError::Interrupted { time } => {
+            interrupted = Some(time);
+            Ok(())
+        }
+        e => Err(e),
+    };
+    let mut driver = Driver::<T>::new(scene.end_time, StopToken::global());
+    if let Some(r) = recorder.as_mut() {
+        driver.observe(r);
+    }
+    driver.observe(&mut progress);
+    let ran = if let Some(spec) = &scene.rig {
+        match crate::rig::run_rig::<T>(scene, spec, &mut driver) {
+            Ok(out) => Ran {
+                sim: out.last,
+                series: Some(out.series),
+                rig: Some(out.report),
+                bekker: out.bekker,
+                figures: out.figures,
+                initial: None,
+            },
+            Err(e) => {
+                stopped(e)?;
+                Ran::default()
+            }
+        }
+    } else {
+        let mut sim = Simulation::<T>::new(scene)?;
+        let initial: Vec<[f64; 3]> = sim.system.fluid.positions().iter().map(|p| p.as_f64()).collect();
+        driver.observe(&mut terrain_series);
+        driver.begin(&sim, None)?;
+        while !driver.done(&sim) {
+            if let Err(e) = driver.step(&mut sim) {
+                stopped(e)?;
+                break;
+            }
+        }
+        Ran { sim: Some(sim), initial: Some(initial), ..Ran::default() }
+    };
+    driver.finish()?;
+    let stats = driver.stats.clone();
+    drop(driver);
+    let Ran { sim, series, rig, bekker, mut figures, initial } = ran;
+    let series = series.or_else(|| initial.is_some().then_some(terrain_series.0));
+    let mut outputs = Vec::new();
+    if let Some(r) = &recorder {
+        outputs.push(r.path().to_path_buf());
+    }
+    let wall = stats.elapsed();
+    let fluid = sim.as_ref().map(|s| s.system.fluid.as_ref());
+    let mut summary = Summary {
+        schema_version: SUMMARY_SCHEMA_VERSION,
+        scene: scene.path.display().to_string(),
+        backend: fluid.map_or_else(|| "cpu".into(), |f| f.backend().into()),
+        adapter: fluid.map_or_else(|| "cpu".into(), |f| f.adapter()),
+        precision: T::NAME.into(),
+        particles: fluid.map_or(0, |f| f.len()),
+        markers: fluid.map_or(0, |f| f.marker_positions().len()),
+        steps: stats.steps,
+        sim_time: sim.as_ref().map_or(0.0, |s| s.time()),
+        wall_time_s: wall,
+        particle_steps_per_s: if wall > 0.0 { stats.particle_steps / wall } else { 0.0 },
+        neighbour_pairs: if stats.steps > 0 { stats.pairs / stats.steps as f64 } else { 0.0 },
+        dt_min: if stats.dt_min.is_finite() { stats.dt_min } else { 0.0 },
+        dt_max: stats.dt_max,
+        max_speed: stats.last_speed,
+        max_speed_run: stats.max_speed_run,
+        mass_initial: fluid.map_or(0.0, |f| f.total_mass()),
+        mass_final: fluid.map_or(0.0, |f| f.active_mass()),
+        escaped_particles: fluid.map_or(0, |f| f.len() - f.active()),
+        nan_detected: matches!(
+            failure,
+            Some(regolith_fsi::SolverError::NonFinite { .. })
+                | Some(regolith_fsi::SolverError::Rheology {
+                    source: regolith_fsi::rheology::RheologyError::NonFinite { .. },
+                    ..
+                })
+        ),
+        error: failure.as_ref().map(|e| e.to_string()),
+        runout: match (fluid, &initial) {
+            (Some(f), Some(i)) => summary::column_runout(scene, i, f),
+            _ => None,
+        },
+        bodies: sim.as_ref().map(body_summaries).unwrap_or_default(),
+        rig,
+        bekker,
+        outputs: Vec::new(),
+        notes: sim.as_ref().map(|s| s.terrain.notes.clone()).unwrap_or_default(),
+    };
+    if let Some(f) = fluid {
+        let p = opts.out.join("particles_final.csv");
+        write_particles_csv(&p, f)?;
+        outputs.push(p);
+    }
+    if let Some(s) = &series {
+        let p = opts.out.join("series.csv");
+        s.write(&p)?;
+        outputs.push(p);
+    }
+    if let (Some(ser), None) = (&series, &scene.rig) {
+        for v in &scene.vehicles {
+            figures.push((format!("vehicle_{}", v.name), figures::vehicle_figure(ser, v)));
+        }
+    }
+    if let (Some(s), Some(i)) = (&sim, &initial) {
+        let axis = summary.runout.as_ref().map(|r| r.axis);
+        figures.push(("deposit_profile".into(), figures::deposit_profile(scene, i, s.system.fluid.as_ref(), axis)));
+    }
+    for (stem, fig) in &figures {
+        let files = write_figure(fig, &opts.out, stem).map_err(|e| RunError::output(&e.path.clone(), e))?;
+        outputs.extend(files);
+    }
+    let summary_path = opts.out.join("summary.json");
+    outputs.push(summary_path.clone());
+    summary.outputs = outputs.iter().map(|p| p.display().to_string()).collect();
+    write_json(&summary_path, &summary)?;
+    match (failure, interrupted) {
+        (Some(e), _) => Err(RunError::Solver(e)),
+        (None, Some(time)) => Err(RunError::Interrupted { time }),
+        (None, None) => Ok(summary),
+    }
+}
+
+fn body_summaries<T: Real>(s: &Simulation<T>) -> Vec<BodySummary> {
+    (0..s.scene.bodies.len())
+        .map(|i| {
+            let st = s.body_state(Body(i));
+            let w = s.fsi_wrench(Body(i));
+            BodySummary {
+                name: s.scene.bodies[i].desc.name.clone(),
+                position: st.com,
+                velocity: st.linvel,
+                fsi_force: w.force,
+                fsi_torque: w.torque,
+            }
+        })
+        .collect()
+}
