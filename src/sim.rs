@@ -14,7 +14,7 @@
 
 use std::path::Path;
 
-use regolith_coupling::{ExchangeReport, FsiSystem, Wrench};
+use regolith_coupling::{ExchangeReport, FsiBodyId, FsiSystem, Wrench};
 use regolith_fsi::{Real, SolverError};
 use regolith_rigid::{BodyId, BodyState, JointDesc, JointId, Pose, ShapeDesc};
 use regolith_terrain::TerrainBuild;
@@ -35,7 +35,7 @@ pub struct Simulation<T: Real> {
     /// What the terrain generator produced.
     pub terrain: TerrainBuild,
     ids: Vec<BodyId>,
-    fsi: Vec<Option<usize>>,
+    fsi: Vec<Option<FsiBodyId>>,
     /// Per vehicle: the rapier joint of each model joint (`None` when not built).
     vehicle_joints: Vec<Vec<Option<JointId>>>,
     /// Initial soil surface, for sinkage.

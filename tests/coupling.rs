@@ -59,7 +59,7 @@ fn the_soil_feels_exactly_the_opposite_of_what_the_bodies_feel() {
         let t0 = sim.time();
         sim.step().expect("step");
         let dt = sim.time() - t0;
-        for (k, imp) in body_impulse.iter_mut().enumerate() {
+        for (k, imp) in sim.system.fsi_bodies().zip(body_impulse.iter_mut()) {
             let f = sim.system.wrench(k).force;
             for a in 0..3 {
                 imp[a] += f[a] * dt;

@@ -19,7 +19,7 @@ use regolith::scene::{Backend, Precision, Scene};
 use regolith_fsi::config::TimeStep;
 use regolith_fsi::cpu::CpuSph;
 use regolith_fsi::math::Vec3;
-use regolith_fsi::{BodyKinematics, BodyMarkers, MarkerInit, SphSolver};
+use regolith_fsi::{BodyMarkers, BodyState, MarkerInit, SphSolver};
 use regolith_wgpu::GpuSph;
 
 const MIXED: &str = r#"
@@ -218,7 +218,7 @@ fn body_placement_and_wrench_kernels_match_their_cpu_twins() {
         .map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]])
         .collect();
     let h = 5f64.to_radians();
-    let state = BodyKinematics {
+    let state = BodyState {
         origin: c,
         com: [c[0] + 0.003, c[1], c[2] + 0.002],
         rotation: [h.sin(), 0.0, 0.0, h.cos()],

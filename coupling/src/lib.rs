@@ -12,7 +12,8 @@ mod markers;
 pub mod system;
 
 pub use markers::{check_watertight, shape_markers};
-pub use system::{ExchangeReport, FsiBody, FsiInterface, FsiSystem, SoilInit, Wrench, extrapolate};
+pub use regolith_body::{BodyState, Wrench};
+pub use system::{ExchangeReport, FsiBody, FsiBodyId, FsiInterface, FsiSystem, SoilInit, extrapolate};
 
 /// Errors of the coupling layer.
 #[derive(Debug, thiserror::Error)]

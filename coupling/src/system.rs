@@ -22,21 +22,25 @@
 
 use std::ops::Range;
 
+use regolith_body::{BodyState, Wrench};
 use regolith_fsi::config::SolverConfig;
 use regolith_fsi::cpu::CpuSph;
 use regolith_fsi::rheology::Material;
-use regolith_fsi::{BodyKinematics, BodyMarkers, MarkerInit, ParticleInit, Real, SolverError, SphSolver};
-use regolith_rigid::{BodyId, BodyState, Motion, RigidWorld, quat_mul, quat_rotate};
+use regolith_fsi::{BodyMarkers, MarkerInit, ParticleInit, Real, SolverError, SphSolver};
+use regolith_rigid::{BodyId, Motion, RigidWorld};
 
 use crate::CouplingError;
 
-/// A force (N) and a torque about the centre of mass (N m), world frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Wrench {
-    /// Force (N).
-    pub force: [f64; 3],
-    /// Torque about the centre of mass (N m).
-    pub torque: [f64; 3],
+/// An FSI body of an [`FsiSystem`]: made only by the system, so it always names one of its
+/// bodies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct FsiBodyId(usize);
+
+impl FsiBodyId {
+    /// Position among the system's FSI bodies (their order in the marker array).
+    pub fn index(self) -> usize {
+        self.0
+    }
 }
 
 /// A body that interacts with the soil.
@@ -59,37 +63,9 @@ pub struct FsiInterface {
     pub wrenches: Vec<Wrench>,
 }
 
-fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-
 /// A body's state advanced by τ at constant linear and angular velocity.
 pub fn extrapolate(s: &BodyState, tau: f64) -> BodyState {
-    let w = s.angvel;
-    let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-    let rotation = if n * tau > 0.0 {
-        let half = 0.5 * n * tau;
-        let k = half.sin() / n;
-        let dq = [w[0] * k, w[1] * k, w[2] * k, half.cos()];
-        quat_mul(dq, s.rotation)
-    } else {
-        s.rotation
-    };
-    let com = add(s.com, scale(s.linvel, tau));
-    // The origin keeps its body-frame offset from the centre of mass.
-    let offset_local = quat_rotate(conj(s.rotation), sub(s.origin, s.com));
-    let origin = add(com, quat_rotate(rotation, offset_local));
-    BodyState { origin, com, rotation, ..*s }
-}
-
-fn conj(q: [f64; 4]) -> [f64; 4] {
-    [-q[0], -q[1], -q[2], q[3]]
+    s.extrapolate(tau)
 }
 
 impl FsiInterface {
@@ -99,19 +75,7 @@ impl FsiInterface {
 
     /// Places every FSI body's markers (position, velocity, acceleration) from its state.
     pub fn place_markers<T: Real>(&self, fluid: &mut dyn SphSolver<T>, states: &[BodyState]) {
-        let kin: Vec<BodyKinematics> = states
-            .iter()
-            .map(|s| BodyKinematics {
-                origin: s.origin,
-                com: s.com,
-                rotation: s.rotation,
-                linvel: s.linvel,
-                angvel: s.angvel,
-                linacc: s.linacc,
-                angacc: s.angacc,
-            })
-            .collect();
-        fluid.place_bodies(&self.marker_sets(), &kin);
+        fluid.place_bodies(&self.marker_sets(), states);
     }
 
     /// The soil's wrench on each body from the last step's marker forces, torques about
@@ -244,9 +208,19 @@ impl<T: Real> FsiSystem<T> {
         self.interface.bodies.iter().map(|b| extrapolate(&self.rigid.state(b.body), tau)).collect()
     }
 
-    /// Mean soil wrench on FSI body `k` over the last interval.
-    pub fn wrench(&self, k: usize) -> Wrench {
-        self.interface.wrenches[k]
+    /// The FSI body of a rigid body, if it has markers.
+    pub fn fsi_body(&self, body: BodyId) -> Option<FsiBodyId> {
+        self.interface.bodies.iter().position(|b| b.body == body).map(FsiBodyId)
+    }
+
+    /// Every FSI body, in marker order.
+    pub fn fsi_bodies(&self) -> impl Iterator<Item = FsiBodyId> + use<T> {
+        (0..self.interface.bodies.len()).map(FsiBodyId)
+    }
+
+    /// Mean soil wrench on an FSI body over the last interval.
+    pub fn wrench(&self, k: FsiBodyId) -> Wrench {
+        self.interface.wrenches[k.0]
     }
 
     /// Advances one exchange interval (shorter if `max` is smaller, to land on an end time).
@@ -266,8 +240,7 @@ impl<T: Real> FsiSystem<T> {
             // Forces of the substep's final stage, torques about the mid-substep centre of mass.
             let mid = self.states_at(tau + 0.5 * r.dt);
             for (acc, w) in sum.iter_mut().zip(self.interface.wrenches(self.fluid.as_ref(), &mid)) {
-                acc.force = add(acc.force, scale(w.force, r.dt));
-                acc.torque = add(acc.torque, scale(w.torque, r.dt));
+                *acc = acc.add_scaled(&w, r.dt);
             }
             tau += r.dt;
             report.fluid_steps += 1;
@@ -278,7 +251,7 @@ impl<T: Real> FsiSystem<T> {
         }
         // 3. Mean over the interval.
         for (w, acc) in self.interface.wrenches.iter_mut().zip(&sum) {
-            *w = Wrench { force: scale(acc.force, 1.0 / tau), torque: scale(acc.torque, 1.0 / tau) };
+            *w = acc.scaled(1.0 / tau);
         }
         // 4. Rigid substeps with that wrench.
         for (b, w) in self.interface.bodies.iter().zip(&self.interface.wrenches) {

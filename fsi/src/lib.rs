@@ -19,4 +19,5 @@ mod solver;
 
 pub use particles::{MarkerInit, ParticleInit, SolverError, StepReport};
 pub use real::Real;
-pub use solver::{BodyKinematics, BodyMarkers, SphSolver, place_on_host};
+pub use regolith_body::{BodyState, Wrench};
+pub use solver::{BodyMarkers, SphSolver, place_on_host};

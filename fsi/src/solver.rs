@@ -5,6 +5,8 @@
 //! order), and on a device backend they are a host copy refreshed by [`SphSolver::sync`]:
 //! call it before reading particles.
 
+use regolith_body::BodyState;
+
 use crate::Real;
 use crate::config::SolverConfig;
 use crate::cpu::CpuSph;
@@ -21,48 +23,12 @@ pub struct BodyMarkers<'a> {
     pub local: &'a [[f64; 3]],
 }
 
-/// A rigid body's state as the soil needs it (world frame, SI).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct BodyKinematics {
-    /// Body-frame origin (m).
-    pub origin: [f64; 3],
-    /// Centre of mass (m).
-    pub com: [f64; 3],
-    /// Orientation, unit quaternion `[x, y, z, w]`.
-    pub rotation: [f64; 4],
-    /// Linear velocity of the centre of mass (m/s).
-    pub linvel: [f64; 3],
-    /// Angular velocity (rad/s).
-    pub angvel: [f64; 3],
-    /// Linear acceleration of the centre of mass (m/s²).
-    pub linacc: [f64; 3],
-    /// Angular acceleration (rad/s²).
-    pub angacc: [f64; 3],
-}
-
-impl BodyKinematics {
-    /// A body-frame point in the world, with its velocity and acceleration (rigid motion).
-    pub fn point(&self, local: [f64; 3]) -> [[f64; 3]; 3] {
-        let [qx, qy, qz, qw] = self.rotation;
-        let (u, l) = (Vec3::new(qx, qy, qz), Vec3::of(local));
-        // v' = v + w t + u × t with t = 2 u × v
-        let t = u.cross(l) * 2.0;
-        let x = Vec3::of(self.origin) + (l + t * qw + u.cross(t));
-        let r = x - Vec3::of(self.com);
-        let w = Vec3::of(self.angvel);
-        let wr = w.cross(r);
-        let v = Vec3::of(self.linvel) + wr;
-        let a = Vec3::of(self.linacc) + Vec3::of(self.angacc).cross(r) + w.cross(wr);
-        [x.as_f64(), v.as_f64(), a.as_f64()]
-    }
-}
-
 /// Places body markers from body states on the host (in f64, rounded to `T`) and hands them to
 /// the solver: what [`SphSolver::place_bodies`] does unless a backend places them itself.
 pub fn place_on_host<T: Real, S: SphSolver<T> + ?Sized>(
     solver: &mut S,
     bodies: &[BodyMarkers<'_>],
-    states: &[BodyKinematics],
+    states: &[BodyState],
 ) {
     let (mut pos, mut vel, mut acc) = (Vec::new(), Vec::new(), Vec::new());
     for (b, s) in bodies.iter().zip(states) {
@@ -133,7 +99,7 @@ pub trait SphSolver<T: Real> {
     /// Places the markers of each body from its state (position, velocity, acceleration of
     /// every marker from the rigid motion). The wgpu backend keeps the body-frame positions on
     /// the device and takes only the states.
-    fn place_bodies(&mut self, bodies: &[BodyMarkers<'_>], states: &[BodyKinematics]) {
+    fn place_bodies(&mut self, bodies: &[BodyMarkers<'_>], states: &[BodyState]) {
         place_on_host(self, bodies, states);
     }
     /// The force (N) and the torque about `about[k]` (N m) the soil exerted on each body's

@@ -8,7 +8,7 @@ use regolith_fsi::cpu::GridSpec;
 use regolith_fsi::kernel::{CubicSpline, Kernel, WendlandC2};
 use regolith_fsi::math::{Sym3, Vec3};
 use regolith_fsi::rheology::{Material, PointState, Rheology, RheologyError};
-use regolith_fsi::{BodyKinematics, BodyMarkers, MarkerInit, ParticleInit, SolverError, SphSolver, StepReport};
+use regolith_fsi::{BodyMarkers, BodyState, MarkerInit, ParticleInit, SolverError, SphSolver, StepReport};
 
 use crate::GpuError;
 use crate::kernels::{
@@ -907,7 +907,7 @@ impl SphSolver<f32> for GpuSph {
         }
         self.markers_dirty = true;
     }
-    fn place_bodies(&mut self, bodies: &[BodyMarkers<'_>], states: &[BodyKinematics]) {
+    fn place_bodies(&mut self, bodies: &[BodyMarkers<'_>], states: &[BodyState]) {
         if bodies.len() != self.n_bodies || states.len() != bodies.len() {
             // Not the bodies the markers were built for: place them from the host.
             regolith_fsi::place_on_host(self, bodies, states);

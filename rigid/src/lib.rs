@@ -14,9 +14,10 @@ mod world;
 
 pub mod dae;
 pub use mesh_io::{MeshError, TriangleMesh, load_mesh};
+pub use regolith_body::BodyState;
 pub use shape::{Axis, Grousers, Pose, ShapeDesc, quat_mul, quat_rotate};
 pub use world::{
-    BodyDesc, BodyId, BodyState, JointDesc, JointId, JointKind, MOTOR_GAIN, MassSpec, Motion, RigidWorld, VelocityMotor,
+    BodyDesc, BodyId, JointDesc, JointId, JointKind, MOTOR_GAIN, MassSpec, Motion, RigidWorld, VelocityMotor,
 };
 
 /// Errors of the rigid world.

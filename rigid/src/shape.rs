@@ -1,6 +1,8 @@
 //! Body shapes, in the body frame (m). The same description builds the rapier collider and,
 //! in `regolith-coupling`, the body's BCE markers.
 
+pub use regolith_body::{quat_mul, quat_rotate};
+
 /// A body-frame axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Axis {
@@ -75,30 +77,6 @@ impl Pose {
         let [x, y, z, w] = self.rotation;
         quat_rotate([-x, -y, -z, w], [0, 1, 2].map(|k| p[k] - self.translation[k]))
     }
-}
-
-/// Rotates `v` by the unit quaternion `q = [x, y, z, w]`.
-pub fn quat_rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
-    let [x, y, z, w] = q;
-    // t = 2 q_v × v; v' = v + w t + q_v × t
-    let t = [2.0 * (y * v[2] - z * v[1]), 2.0 * (z * v[0] - x * v[2]), 2.0 * (x * v[1] - y * v[0])];
-    [
-        v[0] + w * t[0] + (y * t[2] - z * t[1]),
-        v[1] + w * t[1] + (z * t[0] - x * t[2]),
-        v[2] + w * t[2] + (x * t[1] - y * t[0]),
-    ]
-}
-
-/// Hamilton product `a b`.
-pub fn quat_mul(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
-    let [ax, ay, az, aw] = a;
-    let [bx, by, bz, bw] = b;
-    [
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-        aw * bw - ax * bx - ay * by - az * bz,
-    ]
 }
 
 /// A grouser layout on a wheel: plates running across the tread.

@@ -3,7 +3,9 @@
 use rapier3d::prelude::*;
 
 use crate::RigidError;
-use crate::shape::{Axis, Pose, ShapeDesc, quat_rotate};
+use regolith_body::BodyState;
+
+use crate::shape::{Axis, Pose, ShapeDesc};
 
 /// How a body's mass is given.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -111,59 +113,31 @@ pub struct JointDesc {
     pub motor: Option<VelocityMotor>,
 }
 
-/// Index of a body in a [`RigidWorld`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct BodyId(pub usize);
+/// A body of a [`RigidWorld`]: made only by [`RigidWorld::add_body`] (and the world's other
+/// adders), so it always names a body that exists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BodyId(usize);
 
-/// Index of a joint in a [`RigidWorld`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct JointId(pub usize);
-
-/// A body's state in the world frame. Velocities and accelerations are those of the centre of
-/// mass; accelerations are finite differences over the last step.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct BodyState {
-    /// Body-frame origin (m).
-    pub origin: [f64; 3],
-    /// Centre of mass (m).
-    pub com: [f64; 3],
-    /// Orientation, unit quaternion `[x, y, z, w]`.
-    pub rotation: [f64; 4],
-    /// Linear velocity of the centre of mass (m/s).
-    pub linvel: [f64; 3],
-    /// Angular velocity (rad/s).
-    pub angvel: [f64; 3],
-    /// Linear acceleration (m/s²).
-    pub linacc: [f64; 3],
-    /// Angular acceleration (rad/s²).
-    pub angacc: [f64; 3],
+impl BodyId {
+    /// Position in the world's insertion order (for tables and reports).
+    pub fn index(self) -> usize {
+        self.0
+    }
 }
 
-impl BodyState {
-    /// Velocity of a world point moving with the body (m/s).
-    pub fn velocity_at(&self, p: [f64; 3]) -> [f64; 3] {
-        let r = sub(p, self.com);
-        add(self.linvel, cross(self.angvel, r))
-    }
-    /// Acceleration of a world point moving with the body (m/s²), rigid-body kinematics.
-    pub fn acceleration_at(&self, p: [f64; 3]) -> [f64; 3] {
-        let r = sub(p, self.com);
-        add(add(self.linacc, cross(self.angacc, r)), cross(self.angvel, cross(self.angvel, r)))
-    }
-    /// Body-frame point to world.
-    pub fn to_world(&self, local: [f64; 3]) -> [f64; 3] {
-        add(self.origin, quat_rotate(self.rotation, local))
+/// A joint of a [`RigidWorld`]: made only by [`RigidWorld::add_joint`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct JointId(usize);
+
+impl JointId {
+    /// Position in the world's insertion order.
+    pub fn index(self) -> usize {
+        self.0
     }
 }
 
 pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 fn v3(a: [f64; 3]) -> Vector {

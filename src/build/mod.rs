@@ -14,7 +14,7 @@ pub use bodies::carve_bodies;
 pub use surface::SurfaceGrid;
 pub use vehicles::{build_vehicle_joints, place_vehicles};
 
-use regolith_coupling::{CouplingError, FsiSystem, SoilInit, shape_markers};
+use regolith_coupling::{CouplingError, FsiBodyId, FsiSystem, SoilInit, shape_markers};
 use regolith_fsi::rheology::{Material, ParamError};
 use regolith_fsi::{Real, SolverError, SphSolver};
 use regolith_rigid::{BodyId, JointId, Motion, RigidError, RigidWorld};
@@ -154,8 +154,8 @@ pub struct Assembly<T: Real> {
     pub terrain: TerrainBuild,
     /// Rapier-side id of each scene body.
     pub ids: Vec<BodyId>,
-    /// Index among the FSI bodies of each scene body (`None`: no markers).
-    pub fsi: Vec<Option<usize>>,
+    /// The FSI body of each scene body (`None`: no markers).
+    pub fsi: Vec<Option<FsiBodyId>>,
     /// Per vehicle: the rapier joint of each model joint.
     pub vehicle_joints: Vec<Vec<Option<JointId>>>,
     /// The initial soil surface (for sinkage).
@@ -180,17 +180,14 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
     let (mut lo, mut hi) = terrain.domain;
     let mut ids = Vec::new();
     let mut fsi_bodies = Vec::new();
-    let mut fsi = Vec::new();
     for b in &scene.bodies {
         let id = rigid.add_body(&b.desc).map_err(BuildError::rigid(&b.key))?;
         ids.push(id);
         if !b.fsi {
-            fsi.push(None);
             continue;
         }
         let local = shape_markers(&b.desc.shape, d0, b.bce_layers)
             .map_err(|source| BuildError::Markers { key: b.key.clone(), source })?;
-        fsi.push(Some(fsi_bodies.len()));
         fsi_bodies.push((id, local));
         // The neighbour grid must cover the body where it starts and, if prescribed, where it
         // ends.
@@ -221,5 +218,6 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
     let wgpu = scene.backend == Backend::Wgpu;
     let make = |c, m, p: &[_], mk: &[_], d| backend::make_solver::<T>(wgpu, c, m, p, mk, d);
     let system = FsiSystem::with_solver(soil, rigid, fsi_bodies, scene.exchange_interval, &make)?;
+    let fsi = ids.iter().map(|id| system.fsi_body(*id)).collect();
     Ok(Assembly { system, scene, terrain, ids, fsi, vehicle_joints, surface0 })
 }

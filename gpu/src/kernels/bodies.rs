@@ -1,5 +1,5 @@
 //! Body exchange on the device (`bodies.wgsl`): `place` (markers from body states) and `wrench`
-//! (per-body force and torque). CPU twins: `BodyKinematics::point`, `SphSolver::body_wrenches`.
+//! (per-body force and torque). CPU twins: `BodyState::point`, `SphSolver::body_wrenches`.
 
 use crate::GpuError;
 use crate::shader::{Bind, Effects, Variant, layout, pipelines, source};
