@@ -9,11 +9,16 @@
 #![warn(missing_docs)]
 
 mod markers;
+pub mod plugin;
 pub mod system;
 
 pub use markers::{check_watertight, shape_markers};
+pub use plugin::{Attachment, RapierSoil, shape_of_body};
 pub use regolith_body::{BodyState, Wrench};
-pub use system::{ExchangeReport, FsiBody, FsiBodyId, FsiInterface, FsiSystem, SoilInit, extrapolate};
+pub use system::{
+    ExchangeReport, FsiBody, FsiBodyId, FsiInterface, FsiSystem, SoilInit, SolverMaker, cpu_solver, extrapolate,
+    grow_domain, soil_interval,
+};
 
 /// Errors of the coupling layer.
 #[derive(Debug, thiserror::Error)]

@@ -68,6 +68,70 @@ pub fn extrapolate(s: &BodyState, tau: f64) -> BodyState {
     s.extrapolate(tau)
 }
 
+/// Builds the CPU soil solver (the default [`SolverMaker`]).
+pub fn cpu_solver<T: Real>(
+    config: SolverConfig,
+    materials: Vec<Material<T>>,
+    particles: &[ParticleInit],
+    markers: &[MarkerInit],
+    domain: ([f64; 3], [f64; 3]),
+) -> Result<Box<dyn SphSolver<T>>, SolverError> {
+    Ok(Box::new(CpuSph::new(config, materials, particles, markers, domain)?))
+}
+
+/// `domain` grown to hold a sphere of `radius` about `centre` (the neighbour grid must cover
+/// every place a body's markers can reach).
+pub fn grow_domain(domain: ([f64; 3], [f64; 3]), centre: [f64; 3], radius: f64) -> ([f64; 3], [f64; 3]) {
+    let (mut lo, mut hi) = domain;
+    for k in 0..3 {
+        lo[k] = lo[k].min(centre[k] - radius);
+        hi[k] = hi[k].max(centre[k] + radius);
+    }
+    (lo, hi)
+}
+
+/// The soil side of one exchange interval of length `delta`, whatever owns the bodies:
+/// 1. before each soil substep, every body's markers are placed from its state at the
+///    interval's start (`start`) extrapolated at constant velocity to the substep's start;
+/// 2. the soil takes its own substeps until they cover the interval exactly;
+/// 3. after each, the force on each body's markers (the negative of what the soil feels) is
+///    summed into a force and a torque about the body's centre of mass at mid-substep,
+///    weighted by the substep's length.
+///
+/// Returns the report, the mean wrench of each body over the interval, and the time covered.
+pub fn soil_interval<T: Real>(
+    fluid: &mut dyn SphSolver<T>,
+    sets: &[BodyMarkers<'_>],
+    start: &[BodyState],
+    delta: f64,
+) -> Result<(ExchangeReport, Vec<Wrench>, f64), SolverError> {
+    let at = |tau: f64| -> Vec<BodyState> { start.iter().map(|s| s.extrapolate(tau)).collect() };
+    let wrenches = |fluid: &dyn SphSolver<T>, states: &[BodyState]| -> Vec<Wrench> {
+        let about: Vec<[f64; 3]> = states.iter().map(|s| s.com).collect();
+        fluid.body_wrenches(sets, &about).into_iter().map(|[force, torque]| Wrench { force, torque }).collect()
+    };
+    let mut tau = 0.0;
+    let mut sum = vec![Wrench::default(); start.len()];
+    let mut report = ExchangeReport { dt_min: f64::INFINITY, ..Default::default() };
+    while tau < delta * (1.0 - 1e-12) {
+        fluid.place_bodies(sets, &at(tau));
+        let r = fluid.step(Some(delta - tau))?;
+        // Forces of the substep's final stage, torques about the mid-substep centre of mass.
+        let mid = at(tau + 0.5 * r.dt);
+        for (acc, w) in sum.iter_mut().zip(wrenches(&*fluid, &mid)) {
+            *acc = acc.add_scaled(&w, r.dt);
+        }
+        tau += r.dt;
+        report.fluid_steps += 1;
+        report.max_speed = r.max_speed;
+        report.pairs = r.pairs;
+        report.dt_min = report.dt_min.min(r.dt);
+        report.dt_max = report.dt_max.max(r.dt);
+    }
+    let mean = sum.iter().map(|w| w.scaled(1.0 / tau)).collect();
+    Ok((report, mean, tau))
+}
+
 impl FsiInterface {
     fn marker_sets(&self) -> Vec<BodyMarkers<'_>> {
         self.bodies.iter().map(|b| BodyMarkers { first: b.markers.start, local: &b.local }).collect()
@@ -157,10 +221,7 @@ impl<T: Real> FsiSystem<T> {
         fsi_bodies: Vec<(BodyId, Vec<[f64; 3]>)>,
         exchange_interval: f64,
     ) -> Result<Self, CouplingError> {
-        let cpu = |c, m, p: &[ParticleInit], mk: &[MarkerInit], d| -> Result<Box<dyn SphSolver<T>>, SolverError> {
-            Ok(Box::new(CpuSph::new(c, m, p, mk, d)?))
-        };
-        Self::with_solver(soil, rigid, fsi_bodies, exchange_interval, &cpu)
+        Self::with_solver(soil, rigid, fsi_bodies, exchange_interval, &cpu_solver::<T>)
     }
 
     /// As [`FsiSystem::new`], with the soil solver built by `make`.
@@ -227,32 +288,11 @@ impl<T: Real> FsiSystem<T> {
     pub fn advance(&mut self, max: Option<f64>) -> Result<ExchangeReport, SolverError> {
         let delta = max.map_or(self.exchange_interval, |m| m.min(self.exchange_interval));
         let t0 = self.time;
-        let mut tau = 0.0;
-        let n = self.interface.bodies.len();
-        let mut sum = vec![Wrench::default(); n];
-        let mut report = ExchangeReport { dt_min: f64::INFINITY, ..Default::default() };
-        while tau < delta * (1.0 - 1e-12) {
-            // 1. Markers from the body states extrapolated to the substep's start.
-            let states = self.states_at(tau);
-            self.interface.place_markers(self.fluid.as_mut(), &states);
-            // 2. One soil substep.
-            let r = self.fluid.step(Some(delta - tau))?;
-            // Forces of the substep's final stage, torques about the mid-substep centre of mass.
-            let mid = self.states_at(tau + 0.5 * r.dt);
-            for (acc, w) in sum.iter_mut().zip(self.interface.wrenches(self.fluid.as_ref(), &mid)) {
-                *acc = acc.add_scaled(&w, r.dt);
-            }
-            tau += r.dt;
-            report.fluid_steps += 1;
-            report.max_speed = r.max_speed;
-            report.pairs = r.pairs;
-            report.dt_min = report.dt_min.min(r.dt);
-            report.dt_max = report.dt_max.max(r.dt);
-        }
-        // 3. Mean over the interval.
-        for (w, acc) in self.interface.wrenches.iter_mut().zip(&sum) {
-            *w = acc.scaled(1.0 / tau);
-        }
+        // 1.–3. The soil over the interval, from the bodies' states at its start.
+        let start: Vec<BodyState> = self.interface.bodies.iter().map(|b| self.rigid.state(b.body)).collect();
+        let sets = self.interface.marker_sets();
+        let (mut report, mean, tau) = soil_interval(self.fluid.as_mut(), &sets, &start, delta)?;
+        self.interface.wrenches = mean;
         // 4. Rigid substeps with that wrench.
         for (b, w) in self.interface.bodies.iter().zip(&self.interface.wrenches) {
             if matches!(self.rigid.motion(b.body), Motion::Free) {

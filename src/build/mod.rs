@@ -14,7 +14,7 @@ pub use bodies::carve_bodies;
 pub use surface::SurfaceGrid;
 pub use vehicles::{build_vehicle_joints, place_vehicles};
 
-use regolith_coupling::{CouplingError, FsiBodyId, FsiSystem, SoilInit, shape_markers};
+use regolith_coupling::{CouplingError, FsiBodyId, FsiSystem, SoilInit, grow_domain, shape_markers};
 use regolith_fsi::rheology::{Material, ParamError};
 use regolith_fsi::{Real, SolverError, SphSolver};
 use regolith_rigid::{BodyId, JointId, Motion, RigidError, RigidWorld};
@@ -177,7 +177,7 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
     }
     let mut rigid = RigidWorld::new(scene.solver.gravity);
     bodies::add_container(&mut rigid, &terrain, d0)?;
-    let (mut lo, mut hi) = terrain.domain;
+    let mut domain = terrain.domain;
     let mut ids = Vec::new();
     let mut fsi_bodies = Vec::new();
     for b in &scene.bodies {
@@ -193,15 +193,9 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
         // ends.
         let r = b.desc.shape.bounding_radius() + 2.0 * scene.solver.h();
         let p = b.desc.pose.translation;
-        let mut ends = vec![p];
+        domain = grow_domain(domain, p, r);
         if let Motion::Prescribed { linvel, .. } = b.desc.motion {
-            ends.push([0, 1, 2].map(|k| p[k] + linvel[k] * scene.end_time));
-        }
-        for e in ends {
-            for k in 0..3 {
-                lo[k] = lo[k].min(e[k] - r);
-                hi[k] = hi[k].max(e[k] + r);
-            }
+            domain = grow_domain(domain, [0, 1, 2].map(|k| p[k] + linvel[k] * scene.end_time), r);
         }
     }
     let mut vehicle_joints = Vec::new();
@@ -213,7 +207,7 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
         materials: mats,
         particles: &terrain.particles,
         wall_markers: &terrain.markers,
-        domain: (lo, hi),
+        domain,
     };
     let wgpu = scene.backend == Backend::Wgpu;
     let make = |c, m, p: &[_], mk: &[_], d| backend::make_solver::<T>(wgpu, c, m, p, mk, d);
