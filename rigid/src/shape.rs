@@ -1,6 +1,11 @@
 //! Body shapes, in the body frame (m). The same description builds the rapier collider and,
 //! in `regolith-coupling`, the body's BCE markers.
 
+use rapier3d::parry::bounding_volume::BoundingVolume;
+use rapier3d::parry::math::Vector as PVector;
+use rapier3d::parry::query::PointQuery;
+use rapier3d::parry::shape::{TriMesh, TriMeshFlags};
+use rayon::prelude::*;
 pub use regolith_body::{quat_mul, quat_rotate};
 
 /// A body-frame axis.
@@ -242,8 +247,45 @@ impl ShapeDesc {
 }
 
 impl ShapeDesc {
-    /// Which of the body-frame points lie inside the shape grown by `margin` (m). Meshes use
-    /// a parity test on a ray along +x plus the distance to the surface.
+    /// A closed, outward-oriented triangle mesh of a torus about the z axis: tube centre circle
+    /// of radius `major`, tube radius `minor` (m), `around` segments along the big circle and
+    /// `across` around the tube, so `2 · around · across` triangles. A non-convex test and
+    /// benchmark body (see `examples/carve_bench.rs`); `around` and `across` are at least 3.
+    pub fn torus_mesh(major: f64, minor: f64, around: u32, across: u32) -> Self {
+        use std::f64::consts::TAU;
+        let (n, k) = (around.max(3), across.max(3));
+        let mut vertices = Vec::with_capacity((n * k) as usize);
+        for i in 0..n {
+            let (su, cu) = (TAU * f64::from(i) / f64::from(n)).sin_cos();
+            for j in 0..k {
+                let (sv, cv) = (TAU * f64::from(j) / f64::from(k)).sin_cos();
+                let r = major + minor * cv;
+                vertices.push([r * cu, r * su, minor * sv]);
+            }
+        }
+        let id = |i: u32, j: u32| (i % n) * k + j % k;
+        let mut indices = Vec::with_capacity((2 * n * k) as usize);
+        for i in 0..n {
+            for j in 0..k {
+                // ∂p/∂u × ∂p/∂v points outward, so (i, j) → (i+1, j) → (i+1, j+1) is
+                // counter-clockwise seen from outside.
+                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+                indices.push([a, b, c]);
+                indices.push([a, c, d]);
+            }
+        }
+        Self::Mesh { vertices, indices }
+    }
+
+    /// Which of the body-frame points lie inside the shape grown by `margin` (m). A mesh (which
+    /// must be closed and outward-oriented, as `regolith_coupling::check_watertight` demands)
+    /// becomes a parry [`TriMesh`] (with its BVH) once per call; a point is inside when it lies
+    /// behind the angle-weighted pseudo-normal of the mesh feature nearest to it, or within
+    /// `margin` of the surface. Points far from the surface mostly take their answer from a
+    /// nearby point's distance instead of their own search. The mesh queries run in `f32`
+    /// (parry's precision), on all cores: a point within that precision of the grown surface
+    /// (e.g. a lattice point exactly `margin` from a face) counts as inside. A margin below
+    /// zero does not shrink a mesh.
     pub fn contains_points(&self, points: &[[f64; 3]], margin: f64) -> Vec<bool> {
         let mut inside = vec![false; points.len()];
         self.mark_inside(&Pose::default(), points, margin, &mut inside);
@@ -278,12 +320,7 @@ impl ShapeDesc {
                 return;
             }
             Self::Mesh { vertices, indices } => {
-                for (flag, p) in inside.iter_mut().zip(points) {
-                    if !*flag {
-                        let q = local(*p);
-                        *flag = mesh_contains(vertices, indices, q) || mesh_distance(vertices, indices, q) <= m;
-                    }
-                }
+                mark_inside_mesh(vertices, indices, &local, points, m, inside);
                 return;
             }
             _ => {}
@@ -312,81 +349,114 @@ impl ShapeDesc {
     }
 }
 
-/// Parity of crossings of a ray from `p` along +x with the mesh's triangles.
-fn mesh_contains(v: &[[f64; 3]], t: &[[u32; 3]], p: [f64; 3]) -> bool {
-    let mut crossings = 0;
-    for tri in t {
-        let [a, b, c] = tri.map(|i| v[i as usize]);
-        // Möller–Trumbore with direction (1, 0, 0); a slight tilt avoids edge-on hits.
-        let d = [1.0, 1.234e-7, 2.345e-7];
-        let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let h = [d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2], d[0] * e2[1] - d[1] * e2[0]];
-        let det = e1[0] * h[0] + e1[1] * h[1] + e1[2] * h[2];
-        if det.abs() < 1e-18 {
-            continue;
-        }
-        let f = 1.0 / det;
-        let s = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
-        let u = f * (s[0] * h[0] + s[1] * h[1] + s[2] * h[2]);
-        if !(0.0..=1.0).contains(&u) {
-            continue;
-        }
-        let q = [s[1] * e1[2] - s[2] * e1[1], s[2] * e1[0] - s[0] * e1[2], s[0] * e1[1] - s[1] * e1[0]];
-        let w = f * (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]);
-        if w < 0.0 || u + w > 1.0 {
-            continue;
-        }
-        if f * (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) > 0.0 {
-            crossings += 1;
-        }
+/// Marks the points (given in the frame of the shape that holds the mesh; `local` takes them
+/// into the mesh's frame) inside the closed mesh `vertices`/`indices` or within `m` of it.
+///
+/// Each point's nearest surface point comes from parry's BVH; with `ORIENTED`, parry decides
+/// inside or outside from the angle-weighted pseudo-normal of the feature (face, edge or
+/// vertex) that point lies on. A point close to the surface is cheap to project (the search
+/// is bounded); an unbounded projection of a point deep inside or far outside visits every
+/// triangle near its distance, many of them. But a point `c` at distance `d` from the surface
+/// certifies the open ball of radius `d` about it: no surface crosses it, so every point `p`
+/// in it lies on `c`'s side, and farther than `m` from the surface when `|p − c| < d − m`.
+/// The points are therefore taken in Morton order and each reuses the balls of the last few
+/// points projected before it; only points that no ball covers are projected.
+fn mark_inside_mesh(
+    vertices: &[[f64; 3]],
+    indices: &[[u32; 3]],
+    local: &(impl Fn([f64; 3]) -> [f64; 3] + Sync),
+    points: &[[f64; 3]],
+    m: f64,
+    inside: &mut [bool],
+) {
+    /// Balls remembered per run of points.
+    const BALLS: usize = 32;
+    let Some(mesh) = oriented_trimesh(vertices, indices) else {
+        return; // no triangles: nothing is inside
+    };
+    let m_grow = m.max(0.0) as f32;
+    let m = m as f32;
+    let bounds = mesh.local_aabb();
+    // The f32 rounding of coordinates and projections, as a length: a point within `tie` of
+    // the grown surface counts as inside, so points exactly `m` from it (a lattice aligned
+    // with a face, points on the surface for m = 0) are all in rather than in or out by
+    // rounding. Sixteen times as much is taken off each certified radius, to be safe.
+    let tie = 4.0 * f32::EPSILON * (bounds.mins.abs().max(bounds.maxs.abs()).max_element() + m_grow);
+    let slack = 16.0 * tie;
+    // A point farther than m from the mesh's box is farther than m from the mesh, and outside.
+    let reach = bounds.loosened(m_grow + 2.0 * tie);
+    // Projections are searched first within this distance, which decides most points near
+    // the surface without a long search.
+    let near = m_grow + (bounds.maxs - bounds.mins).length() / 128.0;
+    let extent = (reach.maxs - reach.mins).max(PVector::splat(f32::MIN_POSITIVE));
+
+    let mut todo: Vec<(u64, usize, PVector)> = inside
+        .par_iter()
+        .zip(points.par_iter())
+        .enumerate()
+        .with_min_len(1024)
+        .filter_map(|(i, (flag, p))| {
+            if *flag {
+                return None;
+            }
+            let q = local(*p);
+            let q = PVector::new(q[0] as f32, q[1] as f32, q[2] as f32);
+            reach.contains_local_point(q).then(|| (morton((q - reach.mins) / extent), i, q))
+        })
+        .collect();
+    todo.par_sort_unstable_by_key(|t| t.0);
+
+    let mesh = &mesh;
+    let hits: Vec<usize> = todo
+        .par_chunks(4096)
+        .flat_map_iter(|run| {
+            let mut balls: Vec<(PVector, f32, bool)> = Vec::with_capacity(BALLS);
+            let mut next = 0;
+            run.iter().filter_map(move |&(_, i, q)| {
+                let covered = balls.iter().find(|(c, r, _)| (q - *c).length() < r - m_grow).map(|b| b.2);
+                let is_in = covered.unwrap_or_else(|| {
+                    let proj = mesh
+                        .project_local_point_with_max_dist(q, false, near)
+                        .unwrap_or_else(|| mesh.project_local_point(q, false));
+                    let d = (proj.point - q).length();
+                    let ball = (q, d * (1.0 - 1e-5) - slack, proj.is_inside);
+                    if balls.len() < BALLS {
+                        balls.push(ball);
+                    } else {
+                        balls[next] = ball;
+                        next = (next + 1) % BALLS;
+                    }
+                    proj.is_inside || d <= m + tie
+                });
+                is_in.then_some(i)
+            })
+        })
+        .collect();
+    for i in hits {
+        inside[i] = true;
     }
-    crossings % 2 == 1
 }
 
-/// Distance from `p` to the nearest triangle of the mesh (m).
-fn mesh_distance(v: &[[f64; 3]], t: &[[u32; 3]], p: [f64; 3]) -> f64 {
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let mut best = f64::INFINITY;
-    for tri in t {
-        let [a, b, c] = tri.map(|i| v[i as usize]);
-        // Closest point on a triangle (Ericson, Real-Time Collision Detection, 5.1.5).
-        let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
-        let (d1, d2) = (dot(ab, ap), dot(ac, ap));
-        let q = if d1 <= 0.0 && d2 <= 0.0 {
-            a
-        } else {
-            let bp = sub(p, b);
-            let (d3, d4) = (dot(ab, bp), dot(ac, bp));
-            let cp = sub(p, c);
-            let (d5, d6) = (dot(ab, cp), dot(ac, cp));
-            let vc = d1 * d4 - d3 * d2;
-            let vb = d5 * d2 - d1 * d6;
-            let va = d3 * d6 - d5 * d4;
-            if d3 >= 0.0 && d4 <= d3 {
-                b
-            } else if d6 >= 0.0 && d5 <= d6 {
-                c
-            } else if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-                let s = d1 / (d1 - d3);
-                [a[0] + s * ab[0], a[1] + s * ab[1], a[2] + s * ab[2]]
-            } else if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-                let s = d2 / (d2 - d6);
-                [a[0] + s * ac[0], a[1] + s * ac[1], a[2] + s * ac[2]]
-            } else if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-                let s = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-                [b[0] + s * (c[0] - b[0]), b[1] + s * (c[1] - b[1]), b[2] + s * (c[2] - b[2])]
-            } else {
-                let den = 1.0 / (va + vb + vc);
-                let (s, u) = (vb * den, vc * den);
-                [a[0] + ab[0] * s + ac[0] * u, a[1] + ab[1] * s + ac[1] * u, a[2] + ab[2] * s + ac[2] * u]
-            }
-        };
-        let d = sub(p, q);
-        best = best.min(dot(d, d).sqrt());
-    }
-    best
+/// Morton (Z-order) code of a point of the unit cube, 10 bits per axis: points near each
+/// other in space get codes near each other.
+fn morton(rel: PVector) -> u64 {
+    let spread = |x: f32| {
+        let mut v = (x.clamp(0.0, 1.0) * 1023.0) as u64;
+        v = (v | (v << 16)) & 0x0300_00FF;
+        v = (v | (v << 8)) & 0x0300_F00F;
+        v = (v | (v << 4)) & 0x030C_30C3;
+        (v | (v << 2)) & 0x0924_9249
+    };
+    spread(rel.x) | (spread(rel.y) << 1) | (spread(rel.z) << 2)
+}
+
+/// A parry mesh with outward pseudo-normals, coincident vertices merged (STL files repeat
+/// them per triangle) and the triangles this collapses removed; `None` without triangles.
+fn oriented_trimesh(vertices: &[[f64; 3]], indices: &[[u32; 3]]) -> Option<TriMesh> {
+    let verts = vertices.iter().map(|v| PVector::new(v[0] as f32, v[1] as f32, v[2] as f32)).collect();
+    let flags =
+        TriMeshFlags::ORIENTED | TriMeshFlags::MERGE_DUPLICATE_VERTICES | TriMeshFlags::DELETE_DEGENERATE_TRIANGLES;
+    TriMesh::with_flags(verts, indices.to_vec(), flags).ok().filter(|t| t.num_triangles() > 0)
 }
 
 #[cfg(test)]
@@ -448,6 +518,348 @@ mod tests {
                 [3, 4, 7],
             ],
         }
+    }
+
+    // The brute-force mesh queries `contains_points` used before parry (O(points × triangles)),
+    // kept verbatim as the test oracle.
+
+    /// Parity of crossings of a ray from `p` along +x with the mesh's triangles.
+    fn mesh_contains(v: &[[f64; 3]], t: &[[u32; 3]], p: [f64; 3]) -> bool {
+        let mut crossings = 0;
+        for tri in t {
+            let [a, b, c] = tri.map(|i| v[i as usize]);
+            // Möller–Trumbore with direction (1, 0, 0); a slight tilt avoids edge-on hits.
+            let d = [1.0, 1.234e-7, 2.345e-7];
+            let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+            let h = [d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2], d[0] * e2[1] - d[1] * e2[0]];
+            let det = e1[0] * h[0] + e1[1] * h[1] + e1[2] * h[2];
+            if det.abs() < 1e-18 {
+                continue;
+            }
+            let f = 1.0 / det;
+            let s = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+            let u = f * (s[0] * h[0] + s[1] * h[1] + s[2] * h[2]);
+            if !(0.0..=1.0).contains(&u) {
+                continue;
+            }
+            let q = [s[1] * e1[2] - s[2] * e1[1], s[2] * e1[0] - s[0] * e1[2], s[0] * e1[1] - s[1] * e1[0]];
+            let w = f * (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]);
+            if w < 0.0 || u + w > 1.0 {
+                continue;
+            }
+            if f * (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) > 0.0 {
+                crossings += 1;
+            }
+        }
+        crossings % 2 == 1
+    }
+
+    /// Distance from `p` to the nearest triangle of the mesh (m).
+    fn mesh_distance(v: &[[f64; 3]], t: &[[u32; 3]], p: [f64; 3]) -> f64 {
+        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let mut best = f64::INFINITY;
+        for tri in t {
+            let [a, b, c] = tri.map(|i| v[i as usize]);
+            // Closest point on a triangle (Ericson, Real-Time Collision Detection, 5.1.5).
+            let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
+            let (d1, d2) = (dot(ab, ap), dot(ac, ap));
+            let q = if d1 <= 0.0 && d2 <= 0.0 {
+                a
+            } else {
+                let bp = sub(p, b);
+                let (d3, d4) = (dot(ab, bp), dot(ac, bp));
+                let cp = sub(p, c);
+                let (d5, d6) = (dot(ab, cp), dot(ac, cp));
+                let vc = d1 * d4 - d3 * d2;
+                let vb = d5 * d2 - d1 * d6;
+                let va = d3 * d6 - d5 * d4;
+                if d3 >= 0.0 && d4 <= d3 {
+                    b
+                } else if d6 >= 0.0 && d5 <= d6 {
+                    c
+                } else if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+                    let s = d1 / (d1 - d3);
+                    [a[0] + s * ab[0], a[1] + s * ab[1], a[2] + s * ab[2]]
+                } else if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+                    let s = d2 / (d2 - d6);
+                    [a[0] + s * ac[0], a[1] + s * ac[1], a[2] + s * ac[2]]
+                } else if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+                    let s = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+                    [b[0] + s * (c[0] - b[0]), b[1] + s * (c[1] - b[1]), b[2] + s * (c[2] - b[2])]
+                } else {
+                    let den = 1.0 / (va + vb + vc);
+                    let (s, u) = (vb * den, vc * den);
+                    [a[0] + ab[0] * s + ac[0] * u, a[1] + ab[1] * s + ac[1] * u, a[2] + ab[2] * s + ac[2] * u]
+                }
+            };
+            let d = sub(p, q);
+            best = best.min(dot(d, d).sqrt());
+        }
+        best
+    }
+
+    /// The old answer: inside by ray parity, or within `m` of a triangle.
+    fn brute_inside(shape: &ShapeDesc, p: [f64; 3], m: f64) -> bool {
+        let ShapeDesc::Mesh { vertices, indices } = shape else { unreachable!("a mesh") };
+        mesh_contains(vertices, indices, p) || mesh_distance(vertices, indices, p) <= m
+    }
+
+    /// splitmix64: reproducible uniform numbers in [0, 1) without a dependency.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// An L-shaped prism 2 × 2 × 1 (the square [1, 2]² cut out of [0, 2]², extruded along z),
+    /// closed and outward-oriented: a reflex edge, and saddle vertices at its ends.
+    fn l_prism() -> ShapeDesc {
+        let outline = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]];
+        let mut vertices: Vec<[f64; 3]> = outline.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        vertices.extend(outline.iter().map(|p| [p[0], p[1], 1.0]));
+        let mut indices = Vec::new();
+        // Caps: a fan from (0, 0), which sees every corner; bottom reversed to face −z.
+        for k in 1..5u32 {
+            indices.push([0, k + 1, k]);
+            indices.push([6, 6 + k, 6 + k + 1]);
+        }
+        for k in 0..6u32 {
+            let k1 = (k + 1) % 6;
+            indices.push([k, k1, 6 + k1]);
+            indices.push([k, 6 + k1, 6 + k]);
+        }
+        ShapeDesc::Mesh { vertices, indices }
+    }
+
+    /// The mesh with three vertices of its own per triangle, as STL files store it.
+    fn unshared(shape: &ShapeDesc) -> ShapeDesc {
+        let ShapeDesc::Mesh { vertices, indices } = shape else { unreachable!("a mesh") };
+        ShapeDesc::Mesh {
+            vertices: indices.iter().flat_map(|t| t.map(|i| vertices[i as usize])).collect(),
+            indices: (0..indices.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect(),
+        }
+    }
+
+    fn rover_chassis() -> ShapeDesc {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/rover_description/meshes/chassis.stl");
+        let mesh = crate::load_mesh(&path, [1.0; 3]).expect("chassis.stl");
+        ShapeDesc::Mesh { vertices: mesh.vertices, indices: mesh.indices }
+    }
+
+    /// `n` random points in the mesh's bounding box grown by `pad` on every side.
+    fn random_points(shape: &ShapeDesc, n: usize, pad: f64, rng: &mut Rng) -> Vec<[f64; 3]> {
+        let ShapeDesc::Mesh { vertices, .. } = shape else { unreachable!("a mesh") };
+        let lo = [0, 1, 2].map(|k| vertices.iter().map(|v| v[k]).fold(f64::MAX, f64::min) - pad);
+        let hi = [0, 1, 2].map(|k| vertices.iter().map(|v| v[k]).fold(f64::MIN, f64::max) + pad);
+        (0..n).map(|_| [0, 1, 2].map(|k| lo[k] + (hi[k] - lo[k]) * rng.next())).collect()
+    }
+
+    /// About `n` lattice points (cell centres, spacing returned) filling the mesh's bounding box
+    /// grown by `pad`: neighbours in space, as soil particles are, which the ball reuse of
+    /// `mark_inside_mesh` relies on.
+    fn lattice_around(shape: &ShapeDesc, n: f64, pad: f64) -> (Vec<[f64; 3]>, f64) {
+        let ShapeDesc::Mesh { vertices, .. } = shape else { unreachable!("a mesh") };
+        let lo = [0, 1, 2].map(|k| vertices.iter().map(|v| v[k]).fold(f64::MAX, f64::min) - pad);
+        let hi = [0, 1, 2].map(|k| vertices.iter().map(|v| v[k]).fold(f64::MIN, f64::max) + pad);
+        let d = ((hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) / n).cbrt();
+        let c = [0, 1, 2].map(|k| ((hi[k] - lo[k]) / d).round() as usize);
+        let mut pts = Vec::with_capacity(c[0] * c[1] * c[2]);
+        for i in 0..c[0] {
+            for j in 0..c[1] {
+                for l in 0..c[2] {
+                    let f = [i, j, l].map(|x| x as f64 + 0.5);
+                    pts.push([lo[0] + f[0] * d, lo[1] + f[1] * d, lo[2] + f[2] * d]);
+                }
+            }
+        }
+        (pts, d)
+    }
+
+    #[test]
+    fn parry_mesh_containment_matches_the_brute_force_oracle_on_a_lattice() {
+        for (name, mesh) in [("L prism", l_prism()), ("torus", ShapeDesc::torus_mesh(0.3, 0.1, 32, 12))] {
+            let (pts, d0) = lattice_around(&mesh, 12_000.0, 0.0137);
+            for margin in [0.0, 0.5 * d0, 2.0 * d0] {
+                let got = mesh.contains_points(&pts, margin);
+                let n_in = got.iter().filter(|x| **x).count();
+                for (p, g) in pts.iter().zip(&got) {
+                    assert_eq!(*g, brute_inside(&mesh, *p, margin), "{name}, margin {margin}: point {p:?}");
+                }
+                assert!(n_in > 1000 && n_in < pts.len() - 1000, "{name}, margin {margin}: {n_in} inside");
+            }
+        }
+    }
+
+    /// Lattice points exactly `margin` from a face of the rover chassis (cell centres at
+    /// (i + ½)·d0 against faces at multiples of d0), or on a face for margin 0, are ties that
+    /// the old f64 brute force decided by rounding, differently from face to face; they are
+    /// all inside now. Every other point gets the old answer.
+    #[test]
+    fn points_exactly_at_the_margin_are_inside() {
+        let chassis = rover_chassis();
+        let ShapeDesc::Mesh { vertices, indices } = &chassis else { unreachable!("a mesh") };
+        let d0 = 0.01;
+        let mut pts = Vec::new();
+        for i in -25..25 {
+            for j in -18..18 {
+                for k in -8..8 {
+                    pts.push([i, j, k].map(|x| (f64::from(x) + 0.5) * d0));
+                }
+            }
+        }
+        for margin in [0.5 * d0, 0.0] {
+            let got = chassis.contains_points(&pts, margin);
+            let mut ties = 0;
+            for (p, g) in pts.iter().zip(got) {
+                if (mesh_distance(vertices, indices, *p) - margin).abs() < 1e-12 {
+                    ties += 1;
+                    assert!(g, "margin {margin}: point {p:?} at the margin is outside");
+                } else {
+                    assert_eq!(g, brute_inside(&chassis, *p, margin), "margin {margin}: point {p:?}");
+                }
+            }
+            assert!(ties > 100, "margin {margin}: only {ties} ties");
+        }
+    }
+
+    #[test]
+    fn parry_mesh_containment_matches_the_brute_force_oracle() {
+        let mut rng = Rng(7);
+        let meshes = [
+            ("L prism", l_prism(), 1.0),
+            ("L prism, vertices unshared", unshared(&l_prism()), 1.0),
+            ("torus", ShapeDesc::torus_mesh(0.3, 0.1, 24, 12), 0.1),
+            ("torus, vertices unshared", unshared(&ShapeDesc::torus_mesh(0.3, 0.1, 24, 12)), 0.1),
+            ("rover chassis", rover_chassis(), 0.05),
+        ];
+        for (name, mesh, size) in meshes {
+            for margin in [0.0, 0.05 * size, 0.3 * size] {
+                let pts = random_points(&mesh, 4000, 0.5 * size, &mut rng);
+                let got = mesh.contains_points(&pts, margin);
+                let want: Vec<bool> = pts.iter().map(|p| brute_inside(&mesh, *p, margin)).collect();
+                let differ: Vec<_> = pts.iter().zip(got.iter().zip(&want)).filter(|(_, (g, w))| g != w).collect();
+                assert!(
+                    differ.is_empty(),
+                    "{name}, margin {margin}: {} of 4000 differ, e.g. {:?}",
+                    differ.len(),
+                    differ[0]
+                );
+                let n_in = want.iter().filter(|x| **x).count();
+                assert!(n_in > 200 && n_in < 3800, "{name}, margin {margin}: {n_in} inside, too few of either kind");
+            }
+            // The same mesh as a rotated, shifted compound part: points go through the pose.
+            let pose = Pose::from_rpy_deg([0.1, -0.2, 0.3], [20.0, -35.0, 50.0]);
+            let part = ShapeDesc::Compound(vec![(pose, mesh.clone())]);
+            let inv = [-pose.rotation[0], -pose.rotation[1], -pose.rotation[2], pose.rotation[3]];
+            let local = random_points(&mesh, 2000, 0.5 * size, &mut rng);
+            let pts: Vec<[f64; 3]> = local.iter().map(|p| pose.apply(*p)).collect();
+            let got = part.contains_points(&pts, 0.05 * size);
+            for (p, g) in pts.iter().zip(got) {
+                let q = quat_rotate(inv, [0, 1, 2].map(|k| p[k] - pose.translation[k]));
+                assert_eq!(g, brute_inside(&mesh, q, 0.05 * size), "{name} posed, point {p:?}");
+            }
+        }
+        // The torus's hole is outside: the old and new answers agree there too.
+        let torus = ShapeDesc::torus_mesh(0.3, 0.1, 24, 12);
+        assert_eq!(
+            torus.contains_points(&[[0.0; 3], [0.3, 0.0, 0.0], [0.0, 0.3, 0.05]], 0.05),
+            vec![false, true, true]
+        );
+        let empty = ShapeDesc::Mesh { vertices: Vec::new(), indices: Vec::new() };
+        assert_eq!(empty.contains_points(&[[0.0; 3]], 1.0), vec![false]);
+    }
+
+    #[test]
+    fn torus_mesh_is_closed_outward_and_close_to_the_torus() {
+        use std::collections::HashSet;
+        let (major, minor) = (0.3, 0.1);
+        let torus = ShapeDesc::torus_mesh(major, minor, 96, 48);
+        let ShapeDesc::Mesh { vertices, indices } = &torus else { unreachable!("a mesh") };
+        assert_eq!(indices.len(), 2 * 96 * 48);
+        // Every directed edge once, and its reverse once.
+        let edges: HashSet<(u32, u32)> =
+            indices.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
+        assert_eq!(edges.len(), 3 * indices.len());
+        assert!(edges.iter().all(|&(a, b)| edges.contains(&(b, a))));
+        // Outward: the signed volume is positive and close to 2π² R r² (inscribed: a bit less).
+        let signed: f64 = indices
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| vertices[i as usize]);
+                a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                    + a[2] * (b[0] * c[1] - b[1] * c[0])
+            })
+            .sum::<f64>()
+            / 6.0;
+        let exact = 2.0 * std::f64::consts::PI.powi(2) * major * minor * minor;
+        assert!(signed > 0.0 && (signed / exact - 1.0).abs() < 0.01, "volume {signed} vs {exact}");
+        // Away from the surface (farther than the chords' sagitta), the mesh agrees with the torus.
+        let mut rng = Rng(11);
+        let pts = random_points(&torus, 5000, 0.05, &mut rng);
+        let got = torus.contains_points(&pts, 0.0);
+        let sagitta = (major + minor) * (1.0 - (std::f64::consts::PI / 48.0).cos()) * 4.0;
+        for (p, g) in pts.iter().zip(got) {
+            let rho = (p[0] * p[0] + p[1] * p[1]).sqrt();
+            let d = ((rho - major).powi(2) + p[2] * p[2]).sqrt() - minor;
+            if d.abs() > sagitta {
+                assert_eq!(g, d < 0.0, "point {p:?} at {d} m from the torus");
+            }
+        }
+    }
+
+    /// Before/after timing of a carve on a small case (the brute force is too slow for the big
+    /// one): `cargo test --release -p regolith-rigid -- --ignored --nocapture carve_timing`.
+    #[test]
+    #[ignore = "timing, not a check"]
+    fn carve_timing_brute_force_vs_parry() {
+        // The case of `cargo run --release -p regolith-rigid --example carve_bench -- 1000 100000`.
+        let torus = ShapeDesc::torus_mesh(0.3, 0.1, 38, 13);
+        let ShapeDesc::Mesh { indices, .. } = &torus else { unreachable!("a mesh") };
+        let (pts, d0) = lattice_around(&torus, 100_000.0, 0.01);
+        let margin = 0.5 * d0;
+        let t = std::time::Instant::now();
+        let want: Vec<bool> = pts.iter().map(|p| brute_inside(&torus, *p, margin)).collect();
+        let brute = t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        let got = torus.contains_points(&pts, margin);
+        let parry = t.elapsed().as_secs_f64();
+        assert_eq!(got, want);
+        let removed = got.iter().filter(|x| **x).count();
+        let pairs = (pts.len() * indices.len()) as f64;
+        eprintln!(
+            "{} triangles × {} points, margin {:.3} mm, {removed} inside: brute force {brute:.3} s \
+             ({:.2} ns per point-triangle pair), parry {parry:.4} s ({} threads)",
+            indices.len(),
+            pts.len(),
+            1e3 * margin,
+            1e9 * brute / pairs,
+            rayon::current_num_threads()
+        );
+    }
+
+    /// The benchmark case of `carve_bench` (100 000 triangles, 1 M lattice points): parry's
+    /// answers checked against the brute force on a random sample of the points (all of them
+    /// would take the brute force half an hour).
+    #[test]
+    #[ignore = "slow: seconds of brute force"]
+    fn carve_of_the_benchmark_case_agrees_with_brute_force_on_a_sample() {
+        let torus = ShapeDesc::torus_mesh(0.3, 0.1, 388, 129);
+        let (pts, d0) = lattice_around(&torus, 1e6, 0.01);
+        let got = torus.contains_points(&pts, 0.5 * d0);
+        let mut rng = Rng(5);
+        for _ in 0..2000 {
+            let i = (rng.next() * pts.len() as f64) as usize;
+            assert_eq!(got[i], brute_inside(&torus, pts[i], 0.5 * d0), "point {:?}", pts[i]);
+        }
+        assert_eq!(got.iter().filter(|x| **x).count(), 421_739, "the count carve_bench prints");
     }
 
     #[test]
