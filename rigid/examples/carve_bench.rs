@@ -8,7 +8,8 @@
 //! ```
 //!
 //! The brute force that parry replaced is timed, on the small case
-//! `carve_bench -- 1000 100000`, by the ignored test `carve_timing_brute_force_vs_parry`.
+//! `carve_bench -- 1000 100000`, by the test `carve_timing_brute_force_vs_parry`
+//! (`cargo test --release -p regolith-rigid --lib carve_timing -- --nocapture`).
 
 use std::time::Instant;
 

@@ -817,8 +817,8 @@ mod tests {
 
     /// Before/after timing of a carve on a small case (the brute force is too slow for the big
     /// one): `cargo test --release -p regolith-rigid -- --ignored --nocapture carve_timing`.
+    /// Also the before/after timing of BENCHMARKS.md (run with `--nocapture`).
     #[test]
-    #[ignore = "timing, not a check"]
     fn carve_timing_brute_force_vs_parry() {
         // The case of `cargo run --release -p regolith-rigid --example carve_bench -- 1000 100000`.
         let torus = ShapeDesc::torus_mesh(0.3, 0.1, 38, 13);
@@ -849,7 +849,6 @@ mod tests {
     /// answers checked against the brute force on a random sample of the points (all of them
     /// would take the brute force half an hour).
     #[test]
-    #[ignore = "slow: seconds of brute force"]
     fn carve_of_the_benchmark_case_agrees_with_brute_force_on_a_sample() {
         let torus = ShapeDesc::torus_mesh(0.3, 0.1, 388, 129);
         let (pts, d0) = lattice_around(&torus, 1e6, 0.01);
