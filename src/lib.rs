@@ -15,7 +15,7 @@
 //! 8. [`rig`]: the plate, cone and wheel rigs (body controllers with their reports);
 //! 9. [`run`]: a whole `regolith run` — build, drive, write, summarise;
 //! 10. [`error`]: the facade [`Error`] over every stage's error type;
-//! 11. [`bench`], [`cli`]: the benchmark and the command-line tool.
+//! 11. [`bench`](mod@bench), [`cli`]: the benchmark and the command-line tool.
 //!
 //! `tests/architecture.rs` fails on an import against this order.
 #![warn(missing_docs)]

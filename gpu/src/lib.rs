@@ -9,7 +9,7 @@
 //! `wgpu::Queue` (the `regolith` facade opens them). Kernels are specialised to the scene's
 //! [`Effects`] by generated constants and module selection, so an effect that is off costs
 //! nothing per particle and a model no material uses is not compiled
-//! ([`GpuSph::variants`]).
+//! ([`SphSolver::variants`](regolith_fsi::SphSolver::variants)).
 //!
 //! Each kernel's CPU twin is the `regolith-fsi` CPU backend; `tests/wgpu_parity.rs` of the
 //! workspace checks them against each other.

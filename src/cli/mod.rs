@@ -131,7 +131,7 @@ pub enum Command {
     Run {
         /// Scene file (TOML).
         scene: PathBuf,
-        /// Output directory [default: the scene's output.dir, else out/<scene name>].
+        /// Output directory (default: the scene's output.dir, else `out/<scene name>`).
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
         /// Backend, overriding the scene's.
