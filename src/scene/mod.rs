@@ -294,11 +294,16 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     if !(end_time.is_finite() && end_time > 0.0) {
         return Err(e("simulation.end_time", format!("must be > 0 s (got {end_time})")));
     }
-    let cfl = sim.cfl.unwrap_or(0.3);
+    // Defaults are the library's: what a scene does not set, SolverConfig::default() decides.
+    let d = SolverConfig::default();
+    let TimeStep::Adaptive { cfl: default_cfl, max: default_max_dt } = d.time_step else {
+        unreachable!("the default time step is adaptive")
+    };
+    let cfl = sim.cfl.unwrap_or(default_cfl);
     if !(cfl.is_finite() && cfl > 0.0 && cfl <= 1.0) {
         return Err(e("simulation.cfl", format!("must be in (0, 1] (got {cfl})")));
     }
-    let max_dt = sim.max_dt.unwrap_or(1e-3);
+    let max_dt = sim.max_dt.unwrap_or(default_max_dt);
     if !(max_dt.is_finite() && max_dt > 0.0) {
         return Err(e("simulation.max_dt", format!("must be > 0 s (got {max_dt})")));
     }
@@ -326,11 +331,12 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
             }
         }
     };
-    let integrator = match sim.integrator.unwrap_or(IntegratorName::Rk2) {
-        IntegratorName::Rk2 => Integrator::Rk2,
-        IntegratorName::Euler => Integrator::Euler,
+    let integrator = match sim.integrator {
+        None => d.integrator,
+        Some(IntegratorName::Rk2) => Integrator::Rk2,
+        Some(IntegratorName::Euler) => Integrator::Euler,
     };
-    let gravity = sim.gravity.unwrap_or([0.0, 0.0, -9.81]);
+    let gravity = sim.gravity.unwrap_or(d.gravity);
     if gravity.iter().any(|g| !g.is_finite()) {
         return Err(e("simulation.gravity", format!("must be three finite numbers in m/s² (got {gravity:?})")));
     }
@@ -355,36 +361,40 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     if !(spacing.is_finite() && spacing > 0.0) {
         return Err(e("sph.spacing", format!("must be > 0 m (got {spacing})")));
     }
-    let h_factor = sph.h_factor.unwrap_or(1.2);
+    let h_factor = sph.h_factor.unwrap_or(d.h_factor);
     if !(h_factor.is_finite() && (1.0..=2.0).contains(&h_factor)) {
         return Err(e("sph.h_factor", format!("must be in [1.0, 2.0] (h/d0; got {h_factor})")));
     }
-    let alpha = sph.artificial_viscosity.unwrap_or(0.1);
+    let alpha = sph.artificial_viscosity.unwrap_or(d.artificial_viscosity);
     if !(alpha.is_finite() && (0.0..=5.0).contains(&alpha)) {
         return Err(e("sph.artificial_viscosity", format!("must be in [0, 5] (got {alpha})")));
     }
-    let shifting = match sph.shifting.unwrap_or(ShiftingName::Xsph) {
-        ShiftingName::None => Shifting::None,
-        ShiftingName::Xsph => Shifting::Xsph,
-        ShiftingName::Ppst => Shifting::Ppst,
-        ShiftingName::PpstXsph => Shifting::PpstXsph,
+    let shifting = match sph.shifting {
+        None => d.shifting,
+        Some(ShiftingName::None) => Shifting::None,
+        Some(ShiftingName::Xsph) => Shifting::Xsph,
+        Some(ShiftingName::Ppst) => Shifting::Ppst,
+        Some(ShiftingName::PpstXsph) => Shifting::PpstXsph,
     };
-    let xsph_epsilon = sph.xsph_epsilon.unwrap_or(0.25);
+    let xsph_epsilon = sph.xsph_epsilon.unwrap_or(d.xsph_epsilon);
     if !(xsph_epsilon.is_finite() && (0.0..=1.0).contains(&xsph_epsilon)) {
         return Err(e("sph.xsph_epsilon", format!("must be in [0, 1] (got {xsph_epsilon})")));
     }
     if sph.xsph_epsilon.is_some() && !shifting.xsph() {
         return Err(e("sph.xsph_epsilon", "applies only when shifting includes \"xsph\"".into()));
     }
-    let shifting_coefficient = sph.shifting_coefficient.unwrap_or(0.1);
+    let shifting_coefficient = sph.shifting_coefficient.unwrap_or(d.shifting_coefficient);
     if !(shifting_coefficient.is_finite() && (0.0..=1.0).contains(&shifting_coefficient)) {
         return Err(e("sph.shifting_coefficient", format!("must be in [0, 1] (got {shifting_coefficient})")));
     }
     if sph.shifting_coefficient.is_some() && !shifting.ppst() {
         return Err(e("sph.shifting_coefficient", "applies only when shifting includes \"ppst\"".into()));
     }
-    let free_surface = sph.free_surface.unwrap_or(true);
-    let threshold = sph.free_surface_threshold.unwrap_or(crate::DEFAULT_FREE_SURFACE_THRESHOLD);
+    let free_surface = sph.free_surface.unwrap_or(d.free_surface_threshold.is_some());
+    let threshold = sph
+        .free_surface_threshold
+        .or(d.free_surface_threshold)
+        .unwrap_or(regolith_fsi::config::DEFAULT_FREE_SURFACE_THRESHOLD);
     if !(threshold.is_finite() && threshold > 0.0 && threshold < 1.0) {
         return Err(e(
             "sph.free_surface_threshold",
@@ -399,17 +409,19 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     if !free_surface && sph.free_surface_stress.is_some() {
         return Err(e("sph.free_surface_stress", "is set but free_surface = false".into()));
     }
-    let free_surface_stress = match sph.free_surface_stress.unwrap_or(FreeSurfaceStressName::Keep) {
-        FreeSurfaceStressName::Keep => FreeSurfaceStress::Keep,
-        FreeSurfaceStressName::Zero => FreeSurfaceStress::Zero,
+    let free_surface_stress = match sph.free_surface_stress {
+        None => d.free_surface_stress,
+        Some(FreeSurfaceStressName::Keep) => FreeSurfaceStress::Keep,
+        Some(FreeSurfaceStressName::Zero) => FreeSurfaceStress::Zero,
     };
-    let bce_layers = sph.bce_layers.unwrap_or(3);
+    let bce_layers = sph.bce_layers.unwrap_or(d.bce_layers as i64);
     if !(1..=8).contains(&bce_layers) {
         return Err(e("sph.bce_layers", format!("must be an integer in 1..=8 (got {bce_layers})")));
     }
-    let kernel = match sph.kernel.unwrap_or(KernelName::Wendland) {
-        KernelName::Wendland => KernelKind::Wendland,
-        KernelName::Cubic => KernelKind::Cubic,
+    let kernel = match sph.kernel {
+        None => d.kernel,
+        Some(KernelName::Wendland) => KernelKind::Wendland,
+        Some(KernelName::Cubic) => KernelKind::Cubic,
     };
     let solver = SolverConfig {
         spacing,
