@@ -29,6 +29,9 @@ export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 cargo fmt --all -- --check
 # Lints (missing docs included: the workspace lints make it a warning, -D warnings an error).
 cargo clippy --release --workspace --all-targets -- -D warnings
+# The library builds without its optional parts (CLI, wgpu, MCAP, plots), and with wgpu alone.
+cargo check --release -p regolith --lib --no-default-features
+cargo check --release -p regolith --lib --no-default-features --features wgpu
 # The API docs build without a broken link or an undocumented public item.
 RUSTDOCFLAGS="-D warnings -D missing_docs" cargo doc --workspace --no-deps
 cargo test --release --workspace --all-targets

@@ -18,10 +18,15 @@
 //! 11. [`bench`](mod@bench), [`cli`]: the benchmark and the command-line tool.
 //!
 //! `tests/architecture.rs` fails on an import against this order.
+//!
+//! Features (all on by default): `cli` (the `regolith` tool, with `mcap` and `plots`), `wgpu`
+//! (the GPU backend), `mcap` (`recording.mcap`), `plots` (PNG/SVG). A library user can turn
+//! them off: `default-features = false`.
 #![warn(missing_docs)]
 
 pub mod bench;
 pub mod build;
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod driver;
 pub mod element;
@@ -40,6 +45,7 @@ pub use regolith_fsi as fsi;
 pub use regolith_rigid as rigid;
 pub use regolith_terrain as terrain;
 pub use regolith_vehicles as vehicles;
+#[cfg(feature = "wgpu")]
 pub use regolith_wgpu as wgpu_backend;
 
 pub use regolith_fsi::config::DEFAULT_FREE_SURFACE_THRESHOLD;

@@ -1,6 +1,7 @@
 //! `recording.mcap`, plots and `regolith inspect`: the recording read back with the mcap crate
 //! validates against the schemas embedded in it, its frame and point counts follow the
 //! `[output]` section, a failed run still leaves a readable file, and every rig draws its plots.
+#![cfg(feature = "mcap")]
 
 mod common;
 

@@ -8,6 +8,7 @@
 //! - Variants: a Drucker–Prager-only scene does not compile the MCC return mapping.
 //! - Whole scenes over the same time: geostatic box (stresses within 1 %), column collapse
 //!   (runout within 2 %), plate sinkage (force–sinkage curve within 3 %).
+#![cfg(feature = "wgpu")]
 
 mod common;
 

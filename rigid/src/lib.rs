@@ -8,6 +8,7 @@
 //! until `reset_forces`), and body states with positions, velocities and accelerations.
 #![warn(missing_docs)]
 
+pub mod bench;
 mod mesh_io;
 mod shape;
 mod world;

@@ -1,15 +1,23 @@
 //! The facade's side of the wgpu backend: it opens the device (the library crates only take
-//! one), chooses between the backends, and builds the soil solver a scene asks for.
+//! one), chooses between the backends, and builds the soil solver a scene asks for. Without the
+//! `wgpu` feature only the CPU backend exists, and asking for wgpu is a one-line error.
 
+#[cfg(feature = "wgpu")]
 use std::any::Any;
+#[cfg(feature = "wgpu")]
 use std::sync::OnceLock;
 
 use regolith_fsi::config::SolverConfig;
 use regolith_fsi::cpu::CpuSph;
 use regolith_fsi::rheology::Material;
 use regolith_fsi::{MarkerInit, ParticleInit, Real, SolverError, SphSolver};
+#[cfg(feature = "wgpu")]
 use regolith_wgpu::GpuSph;
 
+/// What a build without the `wgpu` feature says when the wgpu backend is asked for.
+pub const NO_WGPU: &str = "this build of regolith has no `wgpu` feature: use the cpu backend";
+
+#[cfg(feature = "wgpu")]
 /// An opened wgpu device.
 #[derive(Clone, Debug)]
 pub struct GpuDevice {
@@ -24,6 +32,7 @@ pub struct GpuDevice {
     pub hardware: bool,
 }
 
+#[cfg(feature = "wgpu")]
 fn open() -> Result<GpuDevice, String> {
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
         backends: wgpu::Backends::PRIMARY,
@@ -55,12 +64,14 @@ fn open() -> Result<GpuDevice, String> {
     Ok(GpuDevice { device, queue, name: format!("{} ({:?}, {})", info.name, info.backend, info.driver), hardware })
 }
 
+#[cfg(feature = "wgpu")]
 /// The process's wgpu device, opened on first use.
 pub fn device() -> Result<&'static GpuDevice, String> {
     static DEVICE: OnceLock<Result<GpuDevice, String>> = OnceLock::new();
     DEVICE.get_or_init(open).as_ref().map_err(Clone::clone)
 }
 
+#[cfg(feature = "wgpu")]
 /// Whether `--backend auto` picks wgpu: only for a real GPU (a software adapter is slower
 /// than the CPU backend).
 pub fn real_gpu() -> Option<&'static GpuDevice> {
@@ -79,6 +90,28 @@ pub fn make_solver<T: Real>(
     if !wgpu {
         return Ok(Box::new(CpuSph::new(cfg, materials, particles, markers, domain)?));
     }
+    gpu_solver(cfg, materials, particles, markers, domain)
+}
+
+#[cfg(not(feature = "wgpu"))]
+fn gpu_solver<T: Real>(
+    _cfg: SolverConfig,
+    _materials: Vec<Material<T>>,
+    _particles: &[ParticleInit],
+    _markers: &[MarkerInit],
+    _domain: ([f64; 3], [f64; 3]),
+) -> Result<Box<dyn SphSolver<T>>, SolverError> {
+    Err(SolverError::Setup(NO_WGPU.into()))
+}
+
+#[cfg(feature = "wgpu")]
+fn gpu_solver<T: Real>(
+    cfg: SolverConfig,
+    materials: Vec<Material<T>>,
+    particles: &[ParticleInit],
+    markers: &[MarkerInit],
+    domain: ([f64; 3], [f64; 3]),
+) -> Result<Box<dyn SphSolver<T>>, SolverError> {
     let mats: Box<dyn Any> = Box::new(materials);
     let mats = mats
         .downcast::<Vec<Material<f32>>>()
@@ -99,6 +132,19 @@ pub fn make_solver<T: Real>(
 pub fn resolve_backend(scene: &mut crate::scene::Scene) -> Result<String, String> {
     use crate::scene::{Backend, Precision};
     let f64_asked = scene.precision_set && scene.precision == Precision::F64;
+    #[cfg(not(feature = "wgpu"))]
+    {
+        let _ = f64_asked;
+        match scene.backend {
+            Backend::Cpu => Ok("backend: cpu".into()),
+            Backend::Auto => {
+                scene.backend = Backend::Cpu;
+                Ok("backend auto: cpu (this build has no wgpu feature)".into())
+            }
+            Backend::Wgpu => Err(NO_WGPU.into()),
+        }
+    }
+    #[cfg(feature = "wgpu")]
     match scene.backend {
         Backend::Cpu => Ok("backend: cpu".into()),
         Backend::Auto => match real_gpu() {

@@ -68,3 +68,32 @@ pub(super) fn run(
     }
     Ok(())
 }
+
+/// `regolith bench --carve`: the mesh-carving benchmark of `regolith_rigid::bench`.
+pub(super) fn carve(json: Option<&Path>) -> Result<(), Failure> {
+    let r = regolith_rigid::bench::carve_torus(100_000, 1_000_000, 0.5);
+    println!(
+        "bench carve: {} triangles × {} points (d0 = {:.3} mm, margin {:.3} mm): {:.3} s, {} points removed ({} threads)",
+        r.triangles,
+        r.points,
+        1e3 * r.spacing,
+        1e3 * r.margin,
+        r.seconds,
+        r.removed,
+        rayon::current_num_threads()
+    );
+    if let Some(p) = json {
+        let v = serde_json::json!({
+            "bench": "carve",
+            "triangles": r.triangles,
+            "points": r.points,
+            "spacing_m": r.spacing,
+            "margin_m": r.margin,
+            "removed": r.removed,
+            "seconds": r.seconds,
+            "threads": rayon::current_num_threads(),
+        });
+        crate::output::write_json(p, &v).context("writing bench json")?;
+    }
+    Ok(())
+}

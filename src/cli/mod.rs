@@ -178,6 +178,10 @@ pub enum Command {
         /// Also write the results as JSON to this file.
         #[arg(long, value_name = "FILE")]
         json: Option<PathBuf>,
+        /// Time carving a 100 000-triangle closed mesh out of a 1 M-point lattice (what a mesh
+        /// body costs at scene start) instead of the soil block.
+        #[arg(long)]
+        carve: bool,
     },
     /// Parse and validate a scene file and print what would run.
     Check {
@@ -207,7 +211,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             })
         }
         Command::Check { scene, sets } => check::run(&scene, &sets),
-        Command::Bench { particles, model, backend, precision, steps, warmup, json } => {
+        Command::Bench { carve: true, json, .. } => bench::carve(json.as_deref()),
+        Command::Bench { particles, model, backend, precision, steps, warmup, json, carve: false } => {
             bench::run(particles, model, backend, precision, steps, warmup, json.as_deref())
         }
         Command::Run { scene, out, backend, precision, sets, slips, quiet } => {

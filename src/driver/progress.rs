@@ -2,17 +2,28 @@
 
 use regolith_fsi::Real;
 
-use super::{Observer, RunError, RunStats};
+use super::Observer;
+#[cfg(feature = "cli")]
+use super::{RunError, RunStats};
+#[cfg(feature = "cli")]
 use crate::sim::Simulation;
 
-/// A progress bar on stdout, shown only on a terminal.
+/// A progress bar on stdout, shown only on a terminal (and only with the `cli` feature).
 #[derive(Debug, Default)]
 pub struct Progress {
+    #[cfg(feature = "cli")]
     bar: Option<indicatif::ProgressBar>,
 }
 
 impl Progress {
     /// A bar, unless `quiet` or stdout is not a terminal (then it draws nothing).
+    #[cfg(not(feature = "cli"))]
+    pub fn new(_quiet: bool) -> Self {
+        Self {}
+    }
+
+    /// A bar, unless `quiet` or stdout is not a terminal (then it draws nothing).
+    #[cfg(feature = "cli")]
     pub fn new(quiet: bool) -> Self {
         use std::io::IsTerminal as _;
         let bar = (!quiet && std::io::stdout().is_terminal()).then(|| {
@@ -27,6 +38,10 @@ impl Progress {
     }
 }
 
+#[cfg(not(feature = "cli"))]
+impl<T: Real> Observer<T> for Progress {}
+
+#[cfg(feature = "cli")]
 impl<T: Real> Observer<T> for Progress {
     fn begin(&mut self, _sim: &Simulation<T>, _label: Option<f64>) -> Result<(), RunError> {
         if let Some(b) = &self.bar {

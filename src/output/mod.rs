@@ -7,11 +7,15 @@ pub mod figures;
 pub mod json;
 pub mod particles;
 pub mod plot;
+#[cfg(feature = "mcap")]
 pub mod record;
+#[cfg(feature = "plots")]
+mod render;
 pub mod series;
 
 pub use json::write_json;
 pub use particles::{ParticleRow, particle_row, write_particles_csv};
 pub use plot::{Figure, Panel, PlotError, write_figure};
+#[cfg(feature = "mcap")]
 pub use record::Recorder;
 pub use series::{Series, TerrainSeries};

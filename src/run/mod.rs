@@ -14,7 +14,10 @@ use std::path::PathBuf;
 use regolith_fsi::Real;
 
 use crate::driver::{Driver, Progress, StopToken};
-use crate::output::{Recorder, TerrainSeries, figures, write_figure, write_json, write_particles_csv};
+#[cfg(feature = "mcap")]
+use crate::output::Recorder;
+use crate::output::plot::DRAWS_PLOTS;
+use crate::output::{TerrainSeries, figures, write_figure, write_json, write_particles_csv};
 use crate::scene::{Precision, Scene};
 use crate::sim::{Body, Simulation};
 
@@ -55,6 +58,8 @@ impl<T: Real> Default for Ran<T> {
 
 fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError> {
     std::fs::create_dir_all(&opts.out).map_err(|e| RunError::output(&opts.out, e))?;
+    // Scene validation refuses `output.mcap = true` in a build without the `mcap` feature.
+    #[cfg(feature = "mcap")]
     let mut recorder =
         if scene.output.mcap { Some(Recorder::create(&opts.out.join("recording.mcap"), &scene.output)?) } else { None };
     let mut progress = Progress::new(opts.quiet);
@@ -74,6 +79,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
         e => Err(e),
     };
     let mut driver = Driver::<T>::new(scene.end_time, StopToken::global());
+    #[cfg(feature = "mcap")]
     if let Some(r) = recorder.as_mut() {
         driver.observe(r);
     }
@@ -112,6 +118,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
     let Ran { sim, series, rig, bekker, mut figures, initial } = ran;
     let series = series.or_else(|| initial.is_some().then_some(terrain_series.0));
     let mut outputs = Vec::new();
+    #[cfg(feature = "mcap")]
     if let Some(r) = &recorder {
         outputs.push(r.path().to_path_buf());
     }
@@ -174,6 +181,9 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
     if let (Some(s), Some(i)) = (&sim, &initial) {
         let axis = summary.runout.as_ref().map(|r| r.axis);
         figures.push(("deposit_profile".into(), figures::deposit_profile(scene, i, s.system.fluid.as_ref(), axis)));
+    }
+    if !DRAWS_PLOTS && !figures.is_empty() {
+        summary.notes.push("no plots drawn: this build of regolith has no `plots` feature".into());
     }
     for (stem, fig) in &figures {
         let files = write_figure(fig, &opts.out, stem).map_err(|e| RunError::output(&e.path.clone(), e))?;

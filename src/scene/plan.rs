@@ -60,8 +60,14 @@ pub fn describe(scene: &Scene) -> String {
     );
     // The effects the solver is specialised for (the wgpu pipeline's constants and modules,
     // the CPU backend's monomorphised loops).
-    let mats32: Vec<_> = scene.materials.iter().filter_map(|m| m.params.build::<f32>().ok()).collect();
-    let mut effects = regolith_wgpu::Effects::resolve(sv, &mats32).names();
+    #[cfg(feature = "wgpu")]
+    let mut effects = {
+        let mats32: Vec<_> = scene.materials.iter().filter_map(|m| m.params.build::<f32>().ok()).collect();
+        regolith_wgpu::Effects::resolve(sv, &mats32).names()
+    };
+    // Without the wgpu backend only the choices below are listed.
+    #[cfg(not(feature = "wgpu"))]
+    let mut effects: Vec<&str> = Vec::new();
     let fs = match sv.free_surface_threshold {
         Some(t) => format!("free-surface(λ < {t})"),
         None => "free-surface off".into(),

@@ -1,0 +1,139 @@
+//! `[rig]`: the plate, cone and wheel test rigs.
+
+use super::*;
+
+pub(super) fn resolve_rig(
+    path: &Path,
+    source: &str,
+    r: &RigFile,
+    bodies: &[BodySpec],
+    files: &[BodyFile],
+) -> Result<RigSpec, InputError> {
+    let e = |k: &str, msg: String| key_err(path, source, format!("rig.{k}"), msg);
+    let kind = r.kind.ok_or_else(|| e("type", "is required: \"plate\", \"cone\" or \"wheel\"".into()))?;
+    let kind_name = match kind {
+        RigKind::Plate => "plate",
+        RigKind::Cone => "cone",
+        RigKind::Wheel => "wheel",
+    };
+    let name = r
+        .body
+        .as_ref()
+        .ok_or_else(|| e("body", "is required: the name of the [[bodies]] entry the rig drives".into()))?;
+    let body = bodies
+        .iter()
+        .position(|b| &b.desc.name == name)
+        .ok_or_else(|| e("body", format!("\"{name}\" is not a body of the scene")))?;
+    if !bodies[body].fsi {
+        return Err(e("body", format!("\"{name}\" has fsi = false: a rig measures the soil's force on it")));
+    }
+    if files[body].motion.is_some() {
+        return Err(key_err(
+            path,
+            source,
+            format!("{}.motion", bodies[body].key),
+            format!("is set, but the {kind_name} rig drives body \"{name}\"; remove it"),
+        ));
+    }
+    let forbid = |k: &str, present: bool| -> Result<(), InputError> {
+        if present { Err(e(k, format!("does not apply to a {kind_name} rig"))) } else { Ok(()) }
+    };
+    let positive = |k: &str, v: Option<f64>, unit: &str| -> Result<f64, InputError> {
+        let v = v.ok_or_else(|| e(k, format!("is required for a {kind_name} rig ({unit})")))?;
+        if v.is_finite() && v > 0.0 { Ok(v) } else { Err(e(k, format!("must be > 0 {unit} (got {v})"))) }
+    };
+    let shape = &bodies[body].desc.shape;
+    Ok(match kind {
+        RigKind::Plate => {
+            forbid("angular_velocity", r.angular_velocity.is_some())?;
+            forbid("slips", r.slips.is_some())?;
+            forbid("tow_force", r.tow_force.is_some())?;
+            match shape {
+                ShapeDesc::Cylinder { axis: Axis::Z, .. } | ShapeDesc::Box { .. } => {}
+                _ => {
+                    return Err(e(
+                        "body",
+                        format!(
+                            "\"{name}\" must be a plate: a cylinder with axis = \"z\" (circular) or a box (rectangular)"
+                        ),
+                    ));
+                }
+            }
+            let control = match (r.speed, r.load) {
+                (Some(_), Some(_)) => {
+                    return Err(e("speed", "and load are both given: a plate is speed- or load-controlled".into()));
+                }
+                (None, None) => return Err(e("speed", "is required (m/s, downward), or give load (N)".into())),
+                (Some(_), None) => PlateControl::Speed(positive("speed", r.speed, "m/s")?),
+                (None, Some(_)) => PlateControl::Load(positive("load", r.load, "N")?),
+            };
+            let depth = positive("depth", r.depth, "m")?;
+            let sizes = r.sizes.clone().unwrap_or_default();
+            if let Some(s) = sizes.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+                return Err(e("sizes", format!("must all be > 0 m (got {s})")));
+            }
+            RigSpec::Plate { body, control, depth, sizes }
+        }
+        RigKind::Cone => {
+            for (k, p) in [
+                ("load", r.load.is_some()),
+                ("sizes", r.sizes.is_some()),
+                ("angular_velocity", r.angular_velocity.is_some()),
+                ("slips", r.slips.is_some()),
+                ("tow_force", r.tow_force.is_some()),
+            ] {
+                forbid(k, p)?;
+            }
+            if !matches!(shape, ShapeDesc::Cone { .. }) {
+                return Err(e("body", format!("\"{name}\" must have shape type = \"cone\"")));
+            }
+            RigSpec::Cone { body, speed: positive("speed", r.speed, "m/s")?, depth: positive("depth", r.depth, "m")? }
+        }
+        RigKind::Wheel => {
+            for (k, p) in [("speed", r.speed.is_some()), ("depth", r.depth.is_some()), ("sizes", r.sizes.is_some())] {
+                forbid(k, p)?;
+            }
+            match shape {
+                ShapeDesc::Wheel { .. } | ShapeDesc::Cylinder { axis: Axis::Y, .. } => {}
+                _ => {
+                    return Err(e(
+                        "body",
+                        format!("\"{name}\" must be a wheel: shape type = \"wheel\" (or a cylinder with axis = \"y\")"),
+                    ));
+                }
+            }
+            let drive = match (&r.slips, r.tow_force) {
+                (Some(_), Some(_)) => {
+                    return Err(e("slips", "and tow_force are both given: prescribe slips or tow the carriage".into()));
+                }
+                (None, None) => {
+                    return Err(e(
+                        "slips",
+                        "is required (a list of slip ratios in [0, 1]), or give tow_force (N)".into(),
+                    ));
+                }
+                (Some(s), None) => {
+                    if s.is_empty() {
+                        return Err(e("slips", "must list at least one slip ratio".into()));
+                    }
+                    if let Some(x) = s.iter().find(|x| !(x.is_finite() && (0.0..=1.0).contains(*x))) {
+                        return Err(e("slips", format!("must be in [0, 1] (got {x})")));
+                    }
+                    WheelDrive::Slips(s.clone())
+                }
+                (None, Some(t)) => {
+                    if !(t.is_finite() && t >= 0.0) {
+                        return Err(e("tow_force", format!("must be ≥ 0 N (got {t})")));
+                    }
+                    WheelDrive::Tow(t)
+                }
+            };
+            RigSpec::Wheel {
+                body,
+                load: positive("load", r.load, "N")?,
+                angular_velocity: positive("angular_velocity", r.angular_velocity, "rad/s")?,
+                drive,
+            }
+        }
+    })
+}

@@ -1,0 +1,180 @@
+//! `[simulation]` and `[sph]`: time, time step, integrator, gravity, backend, precision and
+//! the SPH settings, resolved into a [`SolverConfig`]. What a scene leaves out takes
+//! `SolverConfig::default()`.
+
+use super::*;
+
+/// The resolved `[simulation]` and `[sph]` sections.
+pub(super) struct Settings {
+    pub end_time: f64,
+    pub backend: Backend,
+    pub precision: Precision,
+    pub precision_set: bool,
+    pub solver: SolverConfig,
+    pub exchange_interval: f64,
+}
+
+pub(super) fn resolve_settings(
+    sim: Option<&file::SimulationFile>,
+    sph: Option<&file::SphFile>,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<Settings, InputError> {
+    let sim = sim.ok_or_else(|| e("simulation", "section [simulation] is required (at least end_time)".into()))?;
+    let end_time =
+        sim.end_time.ok_or_else(|| e("simulation.end_time", "is required: simulated time in s, > 0".into()))?;
+    if !(end_time.is_finite() && end_time > 0.0) {
+        return Err(e("simulation.end_time", format!("must be > 0 s (got {end_time})")));
+    }
+    // Defaults are the library's: what a scene does not set, SolverConfig::default() decides.
+    let d = SolverConfig::default();
+    let TimeStep::Adaptive { cfl: default_cfl, max: default_max_dt } = d.time_step else {
+        unreachable!("the default time step is adaptive")
+    };
+    let cfl = sim.cfl.unwrap_or(default_cfl);
+    if !(cfl.is_finite() && cfl > 0.0 && cfl <= 1.0) {
+        return Err(e("simulation.cfl", format!("must be in (0, 1] (got {cfl})")));
+    }
+    let max_dt = sim.max_dt.unwrap_or(default_max_dt);
+    if !(max_dt.is_finite() && max_dt > 0.0) {
+        return Err(e("simulation.max_dt", format!("must be > 0 s (got {max_dt})")));
+    }
+    let time_step = match &sim.dt {
+        None => TimeStep::Adaptive { cfl, max: max_dt },
+        Some(toml::Value::String(s)) if s == "auto" => TimeStep::Adaptive { cfl, max: max_dt },
+        Some(v) => {
+            let dt = v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+            match dt {
+                Some(dt) if dt.is_finite() && dt > 0.0 && dt <= end_time => {
+                    if sim.cfl.is_some() || sim.max_dt.is_some() {
+                        return Err(e(
+                            "simulation.cfl",
+                            "and max_dt apply to dt = \"auto\" only; remove them or set dt = \"auto\"".into(),
+                        ));
+                    }
+                    TimeStep::Fixed(dt)
+                }
+                _ => {
+                    return Err(e(
+                        "simulation.dt",
+                        format!("must be \"auto\" or a step in s in (0, end_time = {end_time}] (got {v})"),
+                    ));
+                }
+            }
+        }
+    };
+    let integrator = match sim.integrator {
+        None => d.integrator,
+        Some(IntegratorName::Rk2) => Integrator::Rk2,
+        Some(IntegratorName::Euler) => Integrator::Euler,
+    };
+    let gravity = sim.gravity.unwrap_or(d.gravity);
+    if gravity.iter().any(|g| !g.is_finite()) {
+        return Err(e("simulation.gravity", format!("must be three finite numbers in m/s² (got {gravity:?})")));
+    }
+    let backend = match sim.backend.unwrap_or(BackendName::Cpu) {
+        BackendName::Auto => Backend::Auto,
+        BackendName::Cpu => Backend::Cpu,
+        BackendName::Wgpu => Backend::Wgpu,
+    };
+    let precision_set = sim.precision.is_some();
+    if backend == Backend::Wgpu && matches!(sim.precision, Some(PrecisionName::F64)) {
+        return Err(e("simulation.precision", "the wgpu backend runs in f32: use \"f32\" or backend \"cpu\"".into()));
+    }
+    let precision =
+        match sim.precision.unwrap_or(if backend == Backend::Wgpu { PrecisionName::F32 } else { PrecisionName::F64 }) {
+            PrecisionName::F32 => Precision::F32,
+            PrecisionName::F64 => Precision::F64,
+        };
+
+    let sph = sph.ok_or_else(|| e("sph", "section [sph] is required (at least spacing)".into()))?;
+    let spacing =
+        sph.spacing.ok_or_else(|| e("sph.spacing", "is required: initial particle spacing in m, > 0".into()))?;
+    if !(spacing.is_finite() && spacing > 0.0) {
+        return Err(e("sph.spacing", format!("must be > 0 m (got {spacing})")));
+    }
+    let h_factor = sph.h_factor.unwrap_or(d.h_factor);
+    if !(h_factor.is_finite() && (1.0..=2.0).contains(&h_factor)) {
+        return Err(e("sph.h_factor", format!("must be in [1.0, 2.0] (h/d0; got {h_factor})")));
+    }
+    let alpha = sph.artificial_viscosity.unwrap_or(d.artificial_viscosity);
+    if !(alpha.is_finite() && (0.0..=5.0).contains(&alpha)) {
+        return Err(e("sph.artificial_viscosity", format!("must be in [0, 5] (got {alpha})")));
+    }
+    let shifting = match sph.shifting {
+        None => d.shifting,
+        Some(ShiftingName::None) => Shifting::None,
+        Some(ShiftingName::Xsph) => Shifting::Xsph,
+        Some(ShiftingName::Ppst) => Shifting::Ppst,
+        Some(ShiftingName::PpstXsph) => Shifting::PpstXsph,
+    };
+    let xsph_epsilon = sph.xsph_epsilon.unwrap_or(d.xsph_epsilon);
+    if !(xsph_epsilon.is_finite() && (0.0..=1.0).contains(&xsph_epsilon)) {
+        return Err(e("sph.xsph_epsilon", format!("must be in [0, 1] (got {xsph_epsilon})")));
+    }
+    if sph.xsph_epsilon.is_some() && !shifting.xsph() {
+        return Err(e("sph.xsph_epsilon", "applies only when shifting includes \"xsph\"".into()));
+    }
+    let shifting_coefficient = sph.shifting_coefficient.unwrap_or(d.shifting_coefficient);
+    if !(shifting_coefficient.is_finite() && (0.0..=1.0).contains(&shifting_coefficient)) {
+        return Err(e("sph.shifting_coefficient", format!("must be in [0, 1] (got {shifting_coefficient})")));
+    }
+    if sph.shifting_coefficient.is_some() && !shifting.ppst() {
+        return Err(e("sph.shifting_coefficient", "applies only when shifting includes \"ppst\"".into()));
+    }
+    let free_surface = sph.free_surface.unwrap_or(d.free_surface_threshold.is_some());
+    let threshold = sph
+        .free_surface_threshold
+        .or(d.free_surface_threshold)
+        .unwrap_or(regolith_fsi::config::DEFAULT_FREE_SURFACE_THRESHOLD);
+    if !(threshold.is_finite() && threshold > 0.0 && threshold < 1.0) {
+        return Err(e(
+            "sph.free_surface_threshold",
+            format!(
+                "must be in (0, 1): the smallest eigenvalue of Σ V (x_b − x_a) ⊗ ∇W is 1 inside the soil (got {threshold})"
+            ),
+        ));
+    }
+    if !free_surface && sph.free_surface_threshold.is_some() {
+        return Err(e("sph.free_surface_threshold", "is set but free_surface = false".into()));
+    }
+    if !free_surface && sph.free_surface_stress.is_some() {
+        return Err(e("sph.free_surface_stress", "is set but free_surface = false".into()));
+    }
+    let free_surface_stress = match sph.free_surface_stress {
+        None => d.free_surface_stress,
+        Some(FreeSurfaceStressName::Keep) => FreeSurfaceStress::Keep,
+        Some(FreeSurfaceStressName::Zero) => FreeSurfaceStress::Zero,
+    };
+    let bce_layers = sph.bce_layers.unwrap_or(d.bce_layers as i64);
+    if !(1..=8).contains(&bce_layers) {
+        return Err(e("sph.bce_layers", format!("must be an integer in 1..=8 (got {bce_layers})")));
+    }
+    let kernel = match sph.kernel {
+        None => d.kernel,
+        Some(KernelName::Wendland) => KernelKind::Wendland,
+        Some(KernelName::Cubic) => KernelKind::Cubic,
+    };
+    let solver = SolverConfig {
+        spacing,
+        h_factor,
+        kernel,
+        integrator,
+        time_step,
+        artificial_viscosity: alpha,
+        shifting,
+        xsph_epsilon,
+        shifting_coefficient,
+        free_surface_threshold: free_surface.then_some(threshold),
+        free_surface_stress,
+        gravity,
+        bce_layers: bce_layers as usize,
+    };
+    let exchange_interval = sim.exchange_interval.unwrap_or(1e-3);
+    if !(exchange_interval.is_finite() && exchange_interval > 0.0 && exchange_interval <= end_time) {
+        return Err(e(
+            "simulation.exchange_interval",
+            format!("must be in (0, end_time = {end_time}] s (got {exchange_interval})"),
+        ));
+    }
+    Ok(Settings { end_time, backend, precision, precision_set, solver, exchange_interval })
+}

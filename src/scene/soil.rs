@@ -1,0 +1,215 @@
+//! `[[materials]]`, `[container]`, `[terrain]` and `[[soil_blocks]]`: the soil and what it is
+//! made of.
+
+use super::*;
+
+/// Materials, container and soil regions.
+pub(super) type Soil = (Vec<SceneMaterial>, Option<Aabb>, Vec<SoilSpec>);
+
+pub(super) fn resolve_soil(
+    path: &Path,
+    source: &str,
+    dir: &Path,
+    file: &SceneFile,
+    spacing: f64,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<Soil, InputError> {
+    // Materials: inline, or from a file named relative to the scene.
+    let mut materials = Vec::new();
+    for (i, m) in file.materials.iter().enumerate() {
+        let prefix = format!("materials[{i}].");
+        let name = m.name.clone().ok_or_else(|| {
+            e(&format!("materials[{i}].name"), "is required: the name terrain and soil blocks refer to".into())
+        })?;
+        if name.trim().is_empty() {
+            return Err(e(&format!("materials[{i}].name"), "must not be empty".into()));
+        }
+        if materials.iter().any(|x: &SceneMaterial| x.name == name) {
+            return Err(e(
+                &format!("materials[{i}].name"),
+                format!("\"{name}\" is defined twice; material names must be unique"),
+            ));
+        }
+        let params = if let Some(f) = &m.file {
+            let only_name = MaterialParams { name: m.name.clone(), file: m.file.clone(), ..Default::default() };
+            if *m != only_name {
+                return Err(e(
+                    &format!("materials[{i}].file"),
+                    "a material read from a file takes only `name` and `file` here; put the other keys in the file"
+                        .into(),
+                ));
+            }
+            let p = dir.join(f);
+            let mut params = load_material_file(&p)?;
+            params.name = Some(name.clone());
+            params
+        } else {
+            build_material::<f64>(m, path, &prefix, source)?;
+            m.clone()
+        };
+        materials.push(SceneMaterial { name, params });
+    }
+    let find_material = |key: &str, name: &Option<String>| -> Result<usize, InputError> {
+        let n = name.as_ref().ok_or_else(|| e(key, "is required: the name of a [[materials]] entry".into()))?;
+        materials.iter().position(|m| &m.name == n).ok_or_else(|| {
+            let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+            e(
+                key,
+                format!(
+                    "\"{n}\" is not a defined material (defined: {})",
+                    if known.is_empty() { "none".into() } else { known.join(", ") }
+                ),
+            )
+        })
+    };
+
+    let container = match &file.container {
+        None => None,
+        Some(c) => {
+            let min = c.min.ok_or_else(|| e("container.min", "is required: lower corner [x, y, z] in m".into()))?;
+            let max = c.max.ok_or_else(|| e("container.max", "is required: upper corner [x, y, z] in m".into()))?;
+            if min.iter().chain(&max).any(|v| !v.is_finite()) {
+                return Err(e("container.max", "corners must be finite".into()));
+            }
+            for k in 0..3 {
+                if max[k] - min[k] < 4.0 * spacing {
+                    return Err(e(
+                        "container.max",
+                        format!(
+                            "must exceed container.min by at least 4 × sph.spacing = {} m along each axis (axis {} spans {} m)",
+                            4.0 * spacing,
+                            ["x", "y", "z"][k],
+                            max[k] - min[k]
+                        ),
+                    ));
+                }
+            }
+            Some(Aabb { min, max })
+        }
+    };
+
+    let mut soil = Vec::new();
+    if let Some(t) = &file.terrain {
+        let material = find_material("terrain.material", &t.material)?;
+        let c =
+            container.ok_or_else(|| e("terrain", "needs a [container]: the bed fills the container floor".into()))?;
+        let height = c.size()[2];
+        let surface = match (t.depth, &t.heightmap) {
+            (Some(_), Some(_)) => {
+                return Err(e("terrain.depth", "and terrain.heightmap are both given: give one".into()));
+            }
+            (None, None) => {
+                return Err(e("terrain.depth", "is required (or terrain.heightmap): bed depth in m".into()));
+            }
+            (Some(d), None) => {
+                if t.heightmap_range.is_some() {
+                    return Err(e("terrain.heightmap_range", "applies only with terrain.heightmap".into()));
+                }
+                if !(d.is_finite() && d >= 2.0 * spacing && d <= height) {
+                    return Err(e(
+                        "terrain.depth",
+                        format!(
+                            "must be in [2 × sph.spacing = {}, container height = {height}] m (got {d})",
+                            2.0 * spacing
+                        ),
+                    ));
+                }
+                Surface::Flat(d)
+            }
+            (None, Some(hm)) => {
+                let range = t.heightmap_range.map(|r| (r[0], r[1]));
+                let map = Heightmap::load(&dir.join(hm), range)
+                    .map_err(|err| InputError::key(path, "terrain.heightmap", err.to_string()).located(source))?;
+                if map.max_height() > height {
+                    return Err(e(
+                        "terrain.heightmap",
+                        format!("heights reach {} m, above the container height {height} m", map.max_height()),
+                    ));
+                }
+                Surface::Heightmap(map)
+            }
+        };
+        soil.push(SoilSpec { material, region: SoilRegion::Bed { container: c, surface }, key: "terrain".into() });
+    }
+    for (i, b) in file.soil_blocks.iter().enumerate() {
+        let k = |s: &str| format!("soil_blocks[{i}].{s}");
+        let material = find_material(&k("material"), &b.material)?;
+        let shape = b.shape.ok_or_else(|| e(&k("shape"), "is required: \"box\" or \"cylinder\"".into()))?;
+        let region = match shape {
+            BlockShapeName::Box => {
+                for (name, present) in [
+                    ("base_center", b.base_center.is_some()),
+                    ("radius", b.radius.is_some()),
+                    ("height", b.height.is_some()),
+                ] {
+                    if present {
+                        return Err(e(
+                            &k(name),
+                            "applies to shape = \"cylinder\" only; a box takes min and max".into(),
+                        ));
+                    }
+                }
+                let min =
+                    b.min.ok_or_else(|| e(&k("min"), "is required for a box: lower corner [x, y, z] in m".into()))?;
+                let max =
+                    b.max.ok_or_else(|| e(&k("max"), "is required for a box: upper corner [x, y, z] in m".into()))?;
+                if (0..3)
+                    .any(|a| !min[a].is_finite() || !max[a].is_finite() || max[a] - min[a] < spacing * (1.0 - 1e-9))
+                {
+                    return Err(e(
+                        &k("max"),
+                        format!("must exceed min by at least sph.spacing = {spacing} m along each axis"),
+                    ));
+                }
+                SoilRegion::Block(Aabb { min, max })
+            }
+            BlockShapeName::Cylinder => {
+                for (name, present) in [("min", b.min.is_some()), ("max", b.max.is_some())] {
+                    if present {
+                        return Err(e(
+                            &k(name),
+                            "applies to shape = \"box\" only; a cylinder takes base_center, radius and height".into(),
+                        ));
+                    }
+                }
+                let base_center = b.base_center.ok_or_else(|| {
+                    e(&k("base_center"), "is required for a cylinder: [x, y, z] of the bottom face centre in m".into())
+                })?;
+                let radius = b.radius.ok_or_else(|| e(&k("radius"), "is required for a cylinder (m)".into()))?;
+                let height = b.height.ok_or_else(|| e(&k("height"), "is required for a cylinder (m)".into()))?;
+                if !(radius.is_finite() && radius >= spacing * (1.0 - 1e-9)) {
+                    return Err(e(&k("radius"), format!("must be ≥ sph.spacing = {spacing} m (got {radius})")));
+                }
+                if !(height.is_finite() && height >= spacing * (1.0 - 1e-9)) {
+                    return Err(e(&k("height"), format!("must be ≥ sph.spacing = {spacing} m (got {height})")));
+                }
+                SoilRegion::Cylinder { base_center, radius, height }
+            }
+        };
+        if let Some(c) = container {
+            let (lo, hi) = region_bounds(&region);
+            let eps = 1e-9 * spacing;
+            if (0..3).any(|a| lo[a] < c.min[a] - eps || hi[a] > c.max[a] + eps) {
+                return Err(e(
+                    &k("shape"),
+                    format!("the block [{lo:?} .. {hi:?}] must lie inside the container [{:?} .. {:?}]", c.min, c.max),
+                ));
+            }
+        } else {
+            return Err(e(&k("shape"), "soil blocks need a [container] to stand in (walls and floor)".into()));
+        }
+        soil.push(SoilSpec { material, region, key: format!("soil_blocks[{i}]") });
+    }
+    if soil.is_empty() {
+        return Err(InputError::file(path, "the scene has no soil: add [terrain] or [[soil_blocks]]"));
+    }
+    for (i, m) in materials.iter().enumerate() {
+        if !soil.iter().any(|s| s.material == i) {
+            return Err(e(
+                &format!("materials[{i}].name"),
+                format!("material \"{}\" is defined but not used by any soil", m.name),
+            ));
+        }
+    }
+    Ok((materials, container, soil))
+}

@@ -1,0 +1,186 @@
+//! What a validated scene is made of: the types [`super::load_scene`] returns.
+
+use super::*;
+
+/// Which compute backend runs the soil.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// A GPU through wgpu when one exists, else the CPU.
+    Auto,
+    /// Rayon on the CPU (the reference).
+    Cpu,
+    /// WGSL compute through wgpu.
+    Wgpu,
+}
+
+impl Backend {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Cpu => "cpu",
+            Self::Wgpu => "wgpu",
+        }
+    }
+}
+
+/// Floating-point precision of the soil solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// Single.
+    F32,
+    /// Double.
+    F64,
+}
+
+impl Precision {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::F32 => "f32",
+            Self::F64 => "f64",
+        }
+    }
+}
+
+/// A named, validated material of a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneMaterial {
+    /// Name used by terrain and soil blocks.
+    pub name: String,
+    /// Checked parameters (from the scene or from the file it names).
+    pub params: MaterialParams,
+}
+
+/// Soil of one material in one region.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SoilSpec {
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Where.
+    pub region: SoilRegion,
+    /// The key it came from (`terrain`, `soil_blocks[2]`), for messages.
+    pub key: String,
+}
+
+/// A body of a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodySpec {
+    /// The rigid body.
+    pub desc: BodyDesc,
+    /// Whether it interacts with the soil (gets BCE markers).
+    pub fsi: bool,
+    /// Marker layers.
+    pub bce_layers: usize,
+    /// The key it came from (`bodies[1]`).
+    pub key: String,
+    /// What to draw in place of the collision shape (a URDF link's visual geometry).
+    pub visual: Option<ShapeDesc>,
+}
+
+/// How a plate is driven.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PlateControl {
+    /// Pushed down at a constant speed (m/s).
+    Speed(f64),
+    /// Loaded with a constant downward force (N) on top of its weight.
+    Load(f64),
+}
+
+/// How a wheel's carriage moves.
+#[derive(Clone, Debug, PartialEq)]
+pub enum WheelDrive {
+    /// Carriage speed prescribed for each slip ratio `s`: `v = ω R (1 − s)`, one run per slip.
+    Slips(Vec<f64>),
+    /// Free carriage pulled back by a constant towing force (N); slip is an output.
+    Tow(f64),
+}
+
+/// A test rig.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RigSpec {
+    /// Plate sinkage (bevameter).
+    Plate {
+        /// Index into [`Scene::bodies`].
+        body: usize,
+        /// Speed or load control.
+        control: PlateControl,
+        /// Sinkage at which the push stops (m).
+        depth: f64,
+        /// Plate sizes to run (radius of a circular plate, smaller side of a rectangular
+        /// one, m); empty runs the body as given.
+        sizes: Vec<f64>,
+    },
+    /// Cone penetrometer.
+    Cone {
+        /// Index into [`Scene::bodies`].
+        body: usize,
+        /// Push speed (m/s).
+        speed: f64,
+        /// Depth of the cone base at which the push stops (m).
+        depth: f64,
+    },
+    /// Single-wheel test rig.
+    Wheel {
+        /// Index into [`Scene::bodies`].
+        body: usize,
+        /// Vertical load on the soil, wheel weight included (N).
+        load: f64,
+        /// Wheel angular velocity (rad/s).
+        angular_velocity: f64,
+        /// Slip list or towing force.
+        drive: WheelDrive,
+    },
+}
+
+/// A validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The file it came from.
+    pub path: PathBuf,
+    /// Simulated time to run (s).
+    pub end_time: f64,
+    /// Backend.
+    pub backend: Backend,
+    /// Precision.
+    pub precision: Precision,
+    /// True when the precision was chosen (in the file or on the command line) rather than
+    /// defaulted: `auto` and `wgpu` may then not switch it to f32.
+    pub precision_set: bool,
+    /// Solver settings.
+    pub solver: SolverConfig,
+    /// Materials, by index.
+    pub materials: Vec<SceneMaterial>,
+    /// Fixed walls on the bottom and four sides (open top).
+    pub container: Option<Aabb>,
+    /// Soil regions.
+    pub soil: Vec<SoilSpec>,
+    /// Rigid bodies.
+    pub bodies: Vec<BodySpec>,
+    /// Test rig, if any.
+    pub rig: Option<RigSpec>,
+    /// Soil–body exchange interval (s).
+    pub exchange_interval: f64,
+    /// What the run records.
+    pub output: OutputSpec,
+    /// URDF vehicles (their links are in `bodies`).
+    pub vehicles: Vec<VehicleSpec>,
+}
+
+/// The `[output]` section: where the run writes and what `recording.mcap` holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputSpec {
+    /// Output directory (relative to the working directory); `--out` overrides it.
+    pub dir: Option<PathBuf>,
+    /// Recording interval in simulated seconds: a frame at t = 0, every, 2·every, … (each taken
+    /// at the first exchange at or after its time).
+    pub every: f64,
+    /// Whether `recording.mcap` is written at all.
+    pub mcap: bool,
+    /// Whether frames carry the soil point cloud.
+    pub particles: bool,
+    /// Keep the particles whose id is a multiple of this (a fixed subset, so it does not flicker).
+    pub decimate: usize,
+    /// Only particles inside this box (min, max) are recorded.
+    pub roi: Option<([f64; 3], [f64; 3])>,
+}
