@@ -88,120 +88,75 @@ pub fn parse_toml<T: DeserializeOwned>(path: &Path, source: &str) -> Result<T, I
     })
 }
 
-/// One line of a TOML file as the locator sees it.
-struct Line {
-    /// 1-based line number.
-    number: usize,
-    /// Dotted path of the table the line belongs to (`materials[1]`), after any header on it.
-    table: String,
-    /// `Some(key)` for a `key = value` line.
-    key: Option<String>,
-    /// True for a table header line.
-    header: bool,
-}
-
-/// Walks the lines of a TOML source, tracking the current table (array-of-tables entries are
-/// indexed in order of appearance).
-fn lines(source: &str) -> impl Iterator<Item = Line> + '_ {
-    let mut table = String::new();
-    let mut counts: std::collections::HashMap<String, usize> = Default::default();
-    source.lines().enumerate().map(move |(i, raw)| {
-        let l = raw.trim();
-        if let Some(h) = header(l) {
-            table = h.name.clone();
-            if h.array {
-                let n = counts.entry(h.name.clone()).or_insert(0);
-                table = format!("{}[{}]", h.name, *n);
-                *n += 1;
-            }
-            return Line { number: i + 1, table: table.clone(), key: None, header: true };
+/// Every key of a TOML document with where it is written: dotted paths (`sph.spacing`,
+/// `materials[1].density`, `bodies[0].shape.radius`; an array element is `name[i]`) and the
+/// byte span of the key (of the element, for array elements), as toml's spanned parser gives
+/// them. A document with syntax errors yields what the parser recovered.
+fn key_spans(source: &str) -> Vec<(String, std::ops::Range<usize>)> {
+    use toml::de::{DeTable, DeValue};
+    fn walk(prefix: &str, t: &DeTable<'_>, out: &mut Vec<(String, std::ops::Range<usize>)>) {
+        for (k, v) in t.iter() {
+            let path = if prefix.is_empty() { k.get_ref().to_string() } else { format!("{prefix}.{}", k.get_ref()) };
+            out.push((path.clone(), k.span()));
+            value(&path, v.get_ref(), out);
         }
-        let key = if l.starts_with('#') || !l.contains('=') {
-            None
-        } else {
-            l.split('=').next().map(|k| k.trim().trim_matches('"').to_string()).filter(|k| !k.is_empty())
-        };
-        Line { number: i + 1, table: table.clone(), key, header: false }
-    })
+    }
+    fn value(path: &str, v: &DeValue<'_>, out: &mut Vec<(String, std::ops::Range<usize>)>) {
+        match v {
+            DeValue::Table(t) => walk(path, t, out),
+            DeValue::Array(a) => {
+                for (i, el) in a.iter().enumerate() {
+                    let p = format!("{path}[{i}]");
+                    out.push((p.clone(), el.span()));
+                    value(&p, el.get_ref(), out);
+                }
+            }
+            _ => {}
+        }
+    }
+    let (doc, _errors) = DeTable::parse_recoverable(source);
+    let mut out = Vec::new();
+    walk("", doc.get_ref(), &mut out);
+    out
 }
 
-fn join(table: &str, key: &str) -> String {
-    if table.is_empty() { key.to_string() } else { format!("{table}.{key}") }
+/// 1-based line of a byte offset.
+fn line_of(source: &str, offset: usize) -> usize {
+    1 + source[..offset.min(source.len())].matches('\n').count()
 }
 
-/// The dotted key defined on a 1-based line (`table.key`), if the line is `key = value` or a
-/// table header.
+/// The dotted key written first on a 1-based line (a table header's table, or the key of a
+/// `key = value` line).
 fn key_at_line(source: &str, line: usize) -> Option<String> {
-    let l = lines(source).find(|l| l.number == line)?;
-    if l.header {
-        return Some(l.table);
-    }
-    l.key.map(|k| join(&l.table, &k))
+    key_spans(source)
+        .into_iter()
+        .filter(|(_, span)| line_of(source, span.start) == line)
+        .min_by_key(|(path, span)| (span.start, std::cmp::Reverse(path.len())))
+        .map(|(path, _)| path)
 }
 
-struct Header {
-    name: String,
-    array: bool,
-}
-
-fn header(l: &str) -> Option<Header> {
-    if let Some(rest) = l.strip_prefix("[[") {
-        let end = rest.find("]]")?;
-        return Some(Header { name: rest[..end].trim().to_string(), array: true });
+/// The parent of a dotted key: `a.b[2].c` → `a.b[2]` → `a.b` → `a`.
+fn parent_key(key: &str) -> Option<&str> {
+    if let Some(stripped) = key.strip_suffix(']') {
+        return stripped.rfind('[').map(|i| &key[..i]);
     }
-    if let Some(rest) = l.strip_prefix('[') {
-        let end = rest.find(']')?;
-        return Some(Header { name: rest[..end].trim().to_string(), array: false });
-    }
-    None
+    key.rfind(['.', '[']).map(|i| &key[..i])
 }
 
 /// The 1-based line where a dotted key (`sph.spacing`, `materials[1].density`, `bodies[0]`) is
-/// written: the key's own line, else the line of the nearest enclosing key (a key inside an
-/// inline table, `bodies[0].shape.radius`, resolves to the line of `bodies[0].shape`), else the
-/// header of its table.
+/// written: the key's own line, else the line of the nearest enclosing key that is written (a
+/// key missing from `[[materials]]` entry 1 resolves to that entry's header; one inside an
+/// inline table, `bodies[0].shape.radius`, to the line of `bodies[0].shape`).
 pub fn locate_key(source: &str, key: &str) -> Option<usize> {
-    if let Some(line) = locate_exact(source, key) {
-        return Some(line);
+    let spans = key_spans(source);
+    let mut k = Some(key);
+    while let Some(cur) = k {
+        if let Some((_, span)) = spans.iter().find(|(p, _)| p == cur) {
+            return Some(line_of(source, span.start));
+        }
+        k = parent_key(cur);
     }
-    let mut k = key;
-    while let Some((parent, _)) = k.rsplit_once('.') {
-        if let Some(line) = locate_exact(source, parent).filter(|_| key_is_written(source, parent)) {
-            return Some(line);
-        }
-        k = parent;
-    }
-    table_header_line(source, key)
-}
-
-fn key_is_written(source: &str, key: &str) -> bool {
-    lines(source).any(|l| l.key.as_ref().is_some_and(|k| join(&l.table, k) == key) || (l.header && l.table == key))
-}
-
-fn table_header_line(source: &str, key: &str) -> Option<usize> {
-    let table_of_key = key.rsplit_once('.').map(|(t, _)| t).unwrap_or("");
-    lines(source)
-        .find(|l| l.header && (l.table == table_of_key || table_of_key.starts_with(&format!("{}.", l.table))))
-        .map(|l| l.number)
-}
-
-fn locate_exact(source: &str, key: &str) -> Option<usize> {
-    let table_of_key = key.rsplit_once('.').map(|(t, _)| t).unwrap_or("");
-    let mut header_line = None;
-    for l in lines(source) {
-        if l.header && l.table == key {
-            return Some(l.number);
-        }
-        if l.header && l.table == table_of_key {
-            header_line = Some(l.number);
-        }
-        if let Some(k) = &l.key
-            && join(&l.table, k) == key
-        {
-            return Some(l.number);
-        }
-    }
-    header_line
+    None
 }
 
 #[cfg(test)]
@@ -218,6 +173,14 @@ mod tests {
         assert_eq!(locate_key(SRC, "materials[1]"), Some(7));
         assert_eq!(locate_key(SRC, "materials[0].density"), Some(5));
         assert_eq!(key_at_line(SRC, 9).as_deref(), Some("materials[1].density"));
+    }
+
+    #[test]
+    fn parents_of_keys() {
+        assert_eq!(parent_key("a.b[2].c"), Some("a.b[2]"));
+        assert_eq!(parent_key("a.b[2]"), Some("a.b"));
+        assert_eq!(parent_key("a.b"), Some("a"));
+        assert_eq!(parent_key("a"), None);
     }
 
     #[test]
