@@ -22,9 +22,17 @@ use regolith_terrain::TerrainBuild;
 use crate::build::{BuildError, SurfaceGrid, assemble};
 use crate::scene::{Scene, load_scene};
 
-/// A body of a [`Simulation`], by index into the scene's bodies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Body(pub usize);
+/// A body of a [`Simulation`]: got from [`Simulation::body`] or [`Simulation::bodies`], so it
+/// always names one of the scene's bodies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Body(pub(crate) usize);
+
+impl Body {
+    /// Position in the scene's `[[bodies]]` (vehicle links follow them).
+    pub fn index(self) -> usize {
+        self.0
+    }
+}
 
 /// A scene being simulated: soil, bodies and their coupling.
 pub struct Simulation<T: Real> {
@@ -85,6 +93,11 @@ impl<T: Real> Simulation<T> {
     /// A body by name.
     pub fn body(&self, name: &str) -> Option<Body> {
         self.scene.bodies.iter().position(|b| b.desc.name == name).map(Body)
+    }
+
+    /// Every body, in scene order.
+    pub fn bodies(&self) -> impl Iterator<Item = Body> + use<T> {
+        (0..self.scene.bodies.len()).map(Body)
     }
 
     /// Its rapier-side id.

@@ -212,7 +212,7 @@ fn a_rover_at_rest_on_the_soil_is_carried_by_its_weight_and_does_not_tunnel() {
             .map(|p| p.as_f64())
             .map(|p| regolith_rigid::quat_rotate(inv, [0, 1, 2].map(|k| p[k] - st.origin[k])))
             .collect();
-        let shape = &scene.bodies[b.0].desc.shape;
+        let shape = &scene.bodies[b.index()].desc.shape;
         let inside = shape.contains_points(&local, 0.0).iter().filter(|x| **x).count();
         assert_eq!(inside, 0, "{inside} soil particles inside {w}");
     }
