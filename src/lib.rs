@@ -40,6 +40,7 @@ pub mod scene;
 pub mod sim;
 
 pub use error::Error;
+pub use regolith_body as body;
 pub use regolith_coupling as coupling;
 pub use regolith_fsi as fsi;
 pub use regolith_rigid as rigid;
