@@ -191,7 +191,17 @@ fn hard_case(name: &str, text: &str) {
     assert!(!s.nan_detected && s.error.is_none());
     assert!(s.max_speed_run < 20.0, "{name}: particle speed {} m/s", s.max_speed_run);
     assert!(s.escaped_particles < s.particles / 100, "{name}: {} particles escaped", s.escaped_particles);
-    assert_eq!(s.mass_initial, s.mass_final + (s.mass_initial - s.mass_final));
+    // Mass rides on the particles: what is still in the domain is the initial mass less that of
+    // the particles that left (one material on a regular lattice: every particle weighs ρ d0³).
+    let kept = (s.particles - s.escaped_particles) as f64 / s.particles as f64;
+    assert!(
+        (s.mass_final - s.mass_initial * kept).abs() <= 1e-9 * s.mass_initial,
+        "{name}: mass {} kg left of {} kg with {} of {} particles escaped",
+        s.mass_final,
+        s.mass_initial,
+        s.escaped_particles,
+        s.particles
+    );
     for b in &s.bodies {
         assert!(b.position.iter().chain(&b.fsi_force).all(|x| x.is_finite()), "{name}: body {} not finite", b.name);
     }
