@@ -30,11 +30,17 @@ fn module_of(src: &Path, file: &Path) -> Option<String> {
     (name != "lib" && name != "main").then_some(name)
 }
 
-/// Every `crate::<module>` named in code (comments and doc lines skipped).
+/// Every `crate::<module>` named in code or in doc comments (a doc link to a later module is a
+/// dependency a reader follows too); plain `//` comments are skipped.
 fn crate_refs(text: &str) -> BTreeSet<String> {
     let mut out = BTreeSet::new();
     for line in text.lines() {
-        let code = line.split("//").next().unwrap_or("");
+        let t = line.trim_start();
+        let code = if t.starts_with("///") || t.starts_with("//!") {
+            t
+        } else {
+            line.split("//").next().unwrap_or("")
+        };
         let mut rest = code;
         while let Some(i) = rest.find("crate::") {
             let after = &rest[i + "crate::".len()..];
@@ -126,10 +132,7 @@ fn the_scanner_sees_imports() {
     // Guard against a scanner that finds nothing (the checks above would then pass vacuously).
     let g = graph();
     assert!(g["run"].contains("driver") && g["sim"].contains("build") && g["cli"].contains("run"), "{g:?}");
-    assert_eq!(crate_refs("use crate::a::b; // crate::c\n/// crate::d\nlet x = crate::e::f();"), {
-        let mut s = BTreeSet::new();
-        s.insert("a".to_string());
-        s.insert("e".to_string());
-        s
-    });
+    let refs = crate_refs("use crate::a::b; // crate::c\n/// [`crate::d::X`]\n// crate::g\nlet x = crate::e::f();");
+    let want: BTreeSet<String> = ["a", "d", "e"].iter().map(|s| s.to_string()).collect();
+    assert_eq!(refs, want);
 }

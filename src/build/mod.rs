@@ -3,7 +3,7 @@
 //! vehicle joints, each FSI body's BCE markers, and the soil solver on the chosen backend.
 //!
 //! This is the second stage of a run (after [`crate::scene`] has validated the files); it knows
-//! nothing of stepping or outputs. [`assemble`] is what [`crate::sim::Simulation::new`] calls.
+//! nothing of stepping or outputs. [`assemble`] gives the parts a simulation is made of.
 
 pub mod backend;
 mod bodies;
@@ -27,7 +27,7 @@ use crate::scene::{Backend, Scene};
 /// [`std::error::Error::source`].
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
-    /// The scene file itself is wrong (from [`crate::sim::Simulation::load`]).
+    /// The scene file itself is wrong (when a scene is loaded and built in one call).
     #[error(transparent)]
     Input(#[from] InputError),
     /// A material's parameters are inconsistent.
@@ -144,7 +144,7 @@ pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, BuildError> {
     Ok(SoilModel { solver, terrain })
 }
 
-/// Everything a [`crate::sim::Simulation`] is made of.
+/// Everything a simulation of a scene is made of: what `sim::Simulation` holds.
 pub struct Assembly<T: Real> {
     /// The coupled system.
     pub system: FsiSystem<T>,
