@@ -36,11 +36,7 @@ fn crate_refs(text: &str) -> BTreeSet<String> {
     let mut out = BTreeSet::new();
     for line in text.lines() {
         let t = line.trim_start();
-        let code = if t.starts_with("///") || t.starts_with("//!") {
-            t
-        } else {
-            line.split("//").next().unwrap_or("")
-        };
+        let code = if t.starts_with("///") || t.starts_with("//!") { t } else { line.split("//").next().unwrap_or("") };
         let mut rest = code;
         while let Some(i) = rest.find("crate::") {
             let after = &rest[i + "crate::".len()..];

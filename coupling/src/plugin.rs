@@ -21,7 +21,7 @@ use rapier3d::geometry::{ColliderSet, Shape};
 use rapier3d::math::{Real as RapierReal, Vector};
 use regolith_body::{BodyState, Wrench};
 use regolith_fsi::{BodyMarkers, MarkerInit, Real, SolverError, SphSolver};
-use regolith_rigid::{Axis, Pose, ShapeDesc};
+use regolith_rigid::{Axis, Pose, ShapeDesc, rapier_body_state};
 
 use crate::CouplingError;
 use crate::system::{ExchangeReport, SoilInit, SolverMaker, cpu_solver, grow_domain, soil_interval};
@@ -170,17 +170,7 @@ impl<T: Real> RapierSoil<T> {
 
 /// The state of a rapier body as the soil sees it, with the given accelerations.
 fn state_of(rb: &RigidBody, acc: ([f64; 3], [f64; 3])) -> BodyState {
-    let p = rb.position();
-    let r = p.rotation;
-    BodyState {
-        origin: a3(p.translation),
-        com: a3(rb.center_of_mass()),
-        rotation: [f64::from(r.x), f64::from(r.y), f64::from(r.z), f64::from(r.w)],
-        linvel: a3(rb.linvel()),
-        angvel: a3(rb.angvel()),
-        linacc: acc.0,
-        angacc: acc.1,
-    }
+    rapier_body_state(rb, acc.0, acc.1)
 }
 
 fn v3(a: [f64; 3]) -> Vector {

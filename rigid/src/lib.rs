@@ -19,6 +19,7 @@ pub use regolith_body::BodyState;
 pub use shape::{Axis, Grousers, Pose, ShapeDesc, quat_mul, quat_rotate};
 pub use world::{
     BodyDesc, BodyId, JointDesc, JointId, JointKind, MOTOR_GAIN, MassSpec, Motion, RigidWorld, VelocityMotor,
+    rapier_body_state,
 };
 
 /// Errors of the rigid world.

@@ -140,6 +140,22 @@ pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
+/// The state of a rapier body (world frame, f64) with the given accelerations of its centre
+/// of mass: rapier keeps none, so its owner supplies them (finite differences of velocities).
+pub fn rapier_body_state(body: &RigidBody, linacc: [f64; 3], angacc: [f64; 3]) -> BodyState {
+    let p = body.position();
+    let r = p.rotation;
+    BodyState {
+        origin: a3(p.translation),
+        com: a3(body.center_of_mass()),
+        rotation: [f64::from(r.x), f64::from(r.y), f64::from(r.z), f64::from(r.w)],
+        linvel: a3(body.linvel()),
+        angvel: a3(body.angvel()),
+        linacc,
+        angacc,
+    }
+}
+
 fn v3(a: [f64; 3]) -> Vector {
     Vector::new(a[0] as Real, a[1] as Real, a[2] as Real)
 }
@@ -455,18 +471,7 @@ impl RigidWorld {
     /// State of a body.
     pub fn state(&self, b: BodyId) -> BodyState {
         let rec = &self.bodies[b.0];
-        let body = &self.world.bodies[rec.handle];
-        let p = body.position();
-        let r = p.rotation;
-        BodyState {
-            origin: a3(p.translation),
-            com: a3(body.center_of_mass()),
-            rotation: [f64::from(r.x), f64::from(r.y), f64::from(r.z), f64::from(r.w)],
-            linvel: a3(body.linvel()),
-            angvel: a3(body.angvel()),
-            linacc: rec.linacc,
-            angacc: rec.angacc,
-        }
+        rapier_body_state(&self.world.bodies[rec.handle], rec.linacc, rec.angacc)
     }
 
     /// Advances by one rapier step of `dt` (s): prescribed motions and wrenches are applied,

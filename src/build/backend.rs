@@ -7,8 +7,8 @@ use std::any::Any;
 #[cfg(feature = "wgpu")]
 use std::sync::OnceLock;
 
+use regolith_coupling::cpu_solver;
 use regolith_fsi::config::SolverConfig;
-use regolith_fsi::cpu::CpuSph;
 use regolith_fsi::rheology::Material;
 use regolith_fsi::{MarkerInit, ParticleInit, Real, SolverError, SphSolver};
 #[cfg(feature = "wgpu")]
@@ -88,42 +88,25 @@ pub fn make_solver<T: Real>(
     domain: ([f64; 3], [f64; 3]),
 ) -> Result<Box<dyn SphSolver<T>>, SolverError> {
     if !wgpu {
-        return Ok(Box::new(CpuSph::new(cfg, materials, particles, markers, domain)?));
+        return cpu_solver(cfg, materials, particles, markers, domain);
     }
-    gpu_solver(cfg, materials, particles, markers, domain)
-}
-
-#[cfg(not(feature = "wgpu"))]
-fn gpu_solver<T: Real>(
-    _cfg: SolverConfig,
-    _materials: Vec<Material<T>>,
-    _particles: &[ParticleInit],
-    _markers: &[MarkerInit],
-    _domain: ([f64; 3], [f64; 3]),
-) -> Result<Box<dyn SphSolver<T>>, SolverError> {
-    Err(SolverError::Setup(NO_WGPU.into()))
-}
-
-#[cfg(feature = "wgpu")]
-fn gpu_solver<T: Real>(
-    cfg: SolverConfig,
-    materials: Vec<Material<T>>,
-    particles: &[ParticleInit],
-    markers: &[MarkerInit],
-    domain: ([f64; 3], [f64; 3]),
-) -> Result<Box<dyn SphSolver<T>>, SolverError> {
-    let mats: Box<dyn Any> = Box::new(materials);
-    let mats = mats
-        .downcast::<Vec<Material<f32>>>()
-        .map_err(|_| SolverError::Setup("the wgpu backend runs in f32; use precision f32".into()))?;
-    let d = device().map_err(|e| SolverError::Setup(format!("wgpu: {e}")))?;
-    let s = GpuSph::new(&d.device, &d.queue, &d.name, cfg, *mats, particles, markers, domain)
-        .map_err(|e| SolverError::Setup(format!("wgpu: {e}")))?;
-    let b: Box<dyn SphSolver<f32>> = Box::new(s);
-    let any: Box<dyn Any> = Box::new(b);
-    any.downcast::<Box<dyn SphSolver<T>>>()
-        .map(|b| *b)
-        .map_err(|_| SolverError::Setup("the wgpu backend runs in f32; use precision f32".into()))
+    #[cfg(not(feature = "wgpu"))]
+    {
+        let _ = (cfg, materials, particles, markers, domain);
+        Err(SolverError::Setup(NO_WGPU.into()))
+    }
+    #[cfg(feature = "wgpu")]
+    {
+        let f32_only = || SolverError::Setup("the wgpu backend runs in f32; use precision f32".into());
+        let mats: Box<dyn Any> = Box::new(materials);
+        let mats = mats.downcast::<Vec<Material<f32>>>().map_err(|_| f32_only())?;
+        let d = device().map_err(|e| SolverError::Setup(format!("wgpu: {e}")))?;
+        let s = GpuSph::new(&d.device, &d.queue, &d.name, cfg, *mats, particles, markers, domain)
+            .map_err(|e| SolverError::Setup(format!("wgpu: {e}")))?;
+        let b: Box<dyn SphSolver<f32>> = Box::new(s);
+        let any: Box<dyn Any> = Box::new(b);
+        any.downcast::<Box<dyn SphSolver<T>>>().map(|b| *b).map_err(|_| f32_only())
+    }
 }
 
 /// Resolves `auto` to `cpu` or `wgpu` and checks that `wgpu` can run: a real GPU for `auto`

@@ -146,7 +146,7 @@ impl Recorder {
 
     /// Starts a run (the first, or the next run of a rig): publishes the shapes and the frame at
     /// the run's current time.
-    pub fn begin_run<T: Real>(&mut self, sim: &Simulation<T>, label: Option<f64>) -> Result<(), RunError> {
+    fn begin_run<T: Real>(&mut self, sim: &Simulation<T>, label: Option<f64>) -> Result<(), RunError> {
         if self.frames > 0 {
             self.offset = self.last + self.spec.every;
         }
@@ -157,11 +157,11 @@ impl Recorder {
             let t = self.offset + sim.time();
             self.write(self.channels.shapes, t, &foxglove::scene_update(t, &shapes))?;
         }
-        self.after_step(sim)
+        self.take_frame(sim)
     }
 
     /// Takes a frame if one is due after a step.
-    pub fn after_step<T: Real>(&mut self, sim: &Simulation<T>) -> Result<(), RunError> {
+    fn take_frame<T: Real>(&mut self, sim: &Simulation<T>) -> Result<(), RunError> {
         self.frame_now = false;
         let every = self.spec.every;
         if sim.time() < self.next - 1e-9 * every {
@@ -230,7 +230,7 @@ impl Recorder {
 
     /// Records named numbers on `topic` (schema `title`, made from the field names) with the
     /// frame the last step took, if it took one.
-    pub fn values<T: Real>(
+    fn record_values<T: Real>(
         &mut self,
         sim: &Simulation<T>,
         topic: &str,
@@ -291,7 +291,7 @@ impl Recorder {
             let names = vehicle_columns(v);
             let values = vehicle_values(sim, vi);
             let fields: Vec<(&str, f64)> = names.iter().map(String::as_str).zip(values).collect();
-            self.values(sim, &format!("/vehicles/{}", v.name), "regolith.Vehicle", &fields)?;
+            self.record_values(sim, &format!("/vehicles/{}", v.name), "regolith.Vehicle", &fields)?;
         }
         Ok(())
     }
@@ -304,7 +304,7 @@ impl<T: Real> Observer<T> for Recorder {
     }
 
     fn after_step(&mut self, sim: &Simulation<T>, _stats: &RunStats) -> Result<(), RunError> {
-        Recorder::after_step(self, sim)?;
+        self.take_frame(sim)?;
         self.vehicles(sim)
     }
 
@@ -315,7 +315,7 @@ impl<T: Real> Observer<T> for Recorder {
         title: &str,
         fields: &[(&str, f64)],
     ) -> Result<(), RunError> {
-        Recorder::values(self, sim, topic, title, fields)
+        self.record_values(sim, topic, title, fields)
     }
 
     fn finish(&mut self) -> Result<(), RunError> {
