@@ -36,3 +36,5 @@ cargo check --release -p regolith --lib --no-default-features --features wgpu
 RUSTDOCFLAGS="-D warnings -D missing_docs" cargo doc --workspace --no-deps
 cargo test --release --workspace --all-targets
 cargo test --release --workspace --doc
+# The stability suite at CI size: every hard case of examples/hard/ within its [[expect]] bounds.
+cargo run --release --bin regolith -- study stability --size ci --out target/stability-ci

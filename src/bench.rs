@@ -65,9 +65,18 @@ pub struct BenchResult {
     pub adapter: String,
 }
 
-/// The bench scene for about `particles` soil particles.
+/// The smallest bench block: 4 × 4 × 8 particles.
+pub const MIN_BENCH_PARTICLES: usize = 128;
+
+/// The bench scene for about `particles` soil particles (at least [`MIN_BENCH_PARTICLES`]).
 pub fn bench_scene(particles: usize, model: BenchModel, precision: Precision) -> Result<Scene, InputError> {
     let d0 = 0.01;
+    if particles < MIN_BENCH_PARTICLES {
+        return Err(InputError::flag(
+            "--particles",
+            format!("{particles} is below the smallest block, {MIN_BENCH_PARTICLES} particles (4 x 4 x 8)"),
+        ));
+    }
     let n = ((particles as f64 / 2.0).cbrt().round() as usize).max(4);
     let side = n as f64 * d0;
     let material = match model {

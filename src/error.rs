@@ -12,6 +12,7 @@ pub use crate::build::BuildError;
 pub use crate::driver::RunError;
 pub use crate::element::ElementError;
 pub use crate::input::InputError;
+pub use crate::study::StudyError;
 pub use regolith_fsi::SolverError;
 
 /// Any Regolith failure.
@@ -32,6 +33,9 @@ pub enum Error {
     /// A material-point test failed.
     #[error(transparent)]
     Element(#[from] ElementError),
+    /// A study could not be carried out.
+    #[error(transparent)]
+    Study(#[from] StudyError),
 }
 
 impl Error {

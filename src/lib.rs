@@ -14,8 +14,9 @@
 //! 7. [`output`]: series, recording, particles CSV, JSON, plots;
 //! 8. [`rig`]: the plate, cone and wheel rigs (body controllers with their reports);
 //! 9. [`run`]: a whole `regolith run` — build, drive, write, summarise;
-//! 10. [`error`]: the facade [`Error`] over every stage's error type;
-//! 11. [`bench`](mod@bench), [`cli`]: the benchmark and the command-line tool.
+//! 10. [`study`]: many runs of shipped scenes, checked and tabulated (the stability suite);
+//! 11. [`error`]: the facade [`Error`] over every stage's error type;
+//! 12. [`bench`](mod@bench), [`cli`]: the benchmark and the command-line tool.
 //!
 //! `tests/architecture.rs` fails on an import against this order.
 //!
@@ -38,6 +39,7 @@ pub mod rig;
 pub mod run;
 pub mod scene;
 pub mod sim;
+pub mod study;
 
 pub use error::Error;
 pub use regolith_body as body;

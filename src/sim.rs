@@ -290,6 +290,47 @@ impl<T: Real> Simulation<T> {
             .sum()
     }
 
+    /// One line about soil particle `id` (its original index): material, position, velocity,
+    /// stress (p, q and the components), p_c and specific volume, as the solver holds them now.
+    pub fn particle_report(&self, id: u32) -> String {
+        let f = &self.system.fluid;
+        let Some(i) = f.ids().iter().position(|x| *x == id) else {
+            return format!("particle {id} (not in this simulation)");
+        };
+        let material = f.material_ids()[i] as usize;
+        let name = self.scene.materials.get(material).map_or("?", |m| m.name.as_str());
+        let p = f.positions()[i].as_f64();
+        let v = f.velocities()[i].as_f64();
+        let st = f.stresses()[i];
+        let c = |x: T| x.as_f64();
+        let state = f.states()[i];
+        format!(
+            "particle {id} (material \"{name}\") at [{:.4}, {:.4}, {:.4}] m, velocity [{:.3e}, {:.3e}, {:.3e}] m/s, stress p = {:.4e} Pa, q = {:.4e} Pa (xx {:.3e}, yy {:.3e}, zz {:.3e}, xy {:.3e}, xz {:.3e}, yz {:.3e}), p_c = {:.4e} Pa, v = {:.4}",
+            p[0],
+            p[1],
+            p[2],
+            v[0],
+            v[1],
+            v[2],
+            c(st.pressure()),
+            c(st.von_mises()),
+            c(st.xx),
+            c(st.yy),
+            c(st.zz),
+            c(st.xy),
+            c(st.xz),
+            c(st.yz),
+            c(state.pc),
+            c(state.v)
+        )
+    }
+
+    /// The initial soil surface height (m) at `(x, y)`: the top of the highest particle's cell
+    /// within `r` of it when the scene was built.
+    pub fn initial_surface_height(&self, x: f64, y: f64, r: f64) -> Option<f64> {
+        self.surface0.height(x, y, r)
+    }
+
     /// Effective soil surface height (m) over a disc of radius `r` around `(x, y)`: the top of
     /// the highest particle's cell there.
     pub fn surface_height(&self, x: f64, y: f64, r: f64) -> Option<f64> {

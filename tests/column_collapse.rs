@@ -12,7 +12,7 @@ use regolith::run::{RunOptions, run_scene};
 fn collapse(scene_file: &str, a: f64) {
     let scene = common::example(scene_file, &[]);
     let out = common::out_dir(scene_file);
-    let summary = run_scene(&scene, &RunOptions { out: out.clone(), quiet: true }).expect("run succeeds");
+    let summary = run_scene(&scene, &RunOptions::quiet(out.clone())).expect("run succeeds");
     let r = summary.runout.as_ref().expect("a column scene reports its runout");
     assert!((r.aspect_ratio - a).abs() < 1e-9);
     let lube = if a <= 1.7 { 1.24 * a } else { 1.6 * a.sqrt() };

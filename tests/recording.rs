@@ -44,7 +44,7 @@ fn a_recording_validates_and_follows_the_output_section() {
     // 0.04 s at a frame every 5 ms: frames at 0, 5, ..., 40 ms = 9; every 3rd particle.
     let scene = common::scene(&bed("end_time = 0.04", "every = 0.005\ndecimate = 3", BOX));
     let out = common::out_dir("recording_terrain");
-    let summary = run_scene(&scene, &RunOptions { out: out.clone(), quiet: true }).expect("runs");
+    let summary = run_scene(&scene, &RunOptions::quiet(out.clone())).expect("runs");
     let topics = common::read_validated(&out.join("recording.mcap"));
     let count = |t: &str| topics.get(t).map_or(0, |v| v.len());
     assert_eq!(count("/terrain/particles"), 9);
@@ -88,7 +88,7 @@ fn the_region_of_interest_keeps_only_the_points_inside_it() {
     let roi = "every = 0.01\nroi_min = [0.0, 0.0, 0.0]\nroi_max = [0.06, 0.12, 0.15]";
     let scene = common::scene(&bed("end_time = 0.01", roi, ""));
     let out = common::out_dir("recording_roi");
-    let summary = run_scene(&scene, &RunOptions { out: out.clone(), quiet: true }).expect("runs");
+    let summary = run_scene(&scene, &RunOptions::quiet(out.clone())).expect("runs");
     let topics = common::read_validated(&out.join("recording.mcap"));
     assert_eq!(topics["/terrain/particles"].len(), 2);
     assert!(!topics.contains_key("/tf"), "no bodies, no frames");
@@ -106,10 +106,16 @@ fn the_region_of_interest_keeps_only_the_points_inside_it() {
 #[test]
 fn a_run_that_fails_midway_leaves_a_readable_recording() {
     // A fixed step ten times the CFL limit: the explicit scheme blows up after a few steps.
-    let scene = common::scene(&bed("end_time = 0.5\ndt = 0.001", "every = 0.001", BOX));
+    let scene = common::scene(&bed("end_time = 0.5\ndt = 0.001\nallow_unstable_dt = true", "every = 0.001", BOX));
     let out = common::out_dir("recording_failure");
-    let err = run_scene(&scene, &RunOptions { out: out.clone(), quiet: true }).expect_err("must fail");
-    assert!(matches!(err, RunError::Solver(_)), "{err}");
+    let err = run_scene(&scene, &RunOptions::quiet(out.clone())).expect_err("must fail");
+    assert!(matches!(err, RunError::Failed { .. }), "{err}");
+    // The one-line report names the particle, its material, position, stress and p_c.
+    let line = err.to_string();
+    for part in ["particle ", "material \"sand\"", " at [", "stress p = ", "p_c = ", "step "] {
+        assert!(line.contains(part), "report lacks `{part}`: {line}");
+    }
+    assert!(!line.contains('\n'), "{line}");
     let topics = common::read_validated(&out.join("recording.mcap"));
     let frames = topics["/terrain/particles"].len();
     assert!(frames >= 2, "frames before the failure: {frames}");
@@ -155,8 +161,7 @@ fn every_rig_and_the_terrain_run_draw_their_plots() {
     for (name, extra, sim, stems, rig_topic) in cases {
         let scene = common::scene(&bed(sim, "every = 0.005", extra));
         let out = common::out_dir(&format!("plots_{name}"));
-        let summary =
-            run_scene(&scene, &RunOptions { out: out.clone(), quiet: true }).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let summary = run_scene(&scene, &RunOptions::quiet(out.clone())).unwrap_or_else(|e| panic!("{name}: {e}"));
         for stem in stems {
             for ext in ["png", "svg"] {
                 let p = out.join(format!("{stem}.{ext}"));
@@ -184,7 +189,7 @@ fn every_rig_and_the_terrain_run_draw_their_plots() {
 fn inspect_lists_topics_counts_and_the_time_range() {
     let scene = common::scene(&bed("end_time = 0.01", "every = 0.005", BOX));
     let out = common::out_dir("recording_inspect");
-    run_scene(&scene, &RunOptions { out: out.clone(), quiet: true }).expect("runs");
+    run_scene(&scene, &RunOptions::quiet(out.clone())).expect("runs");
     let file = out.join("recording.mcap");
     let o =
         std::process::Command::new(env!("CARGO_BIN_EXE_regolith")).arg("inspect").arg(&file).output().expect("runs");

@@ -468,7 +468,7 @@ fn vehicle_scene_mistakes_are_one_line_errors() {
 fn a_vehicle_run_records_every_link_and_its_wheels() {
     let scene = rover_scene(0.02, "drive = { wheel_speed = 1.0, max_torque = 6.0 }\n\n[output]\nevery = 0.01");
     let out = common::out_dir("vehicle_run");
-    regolith::run::run_scene(&scene, &regolith::run::RunOptions { out: out.clone(), quiet: true }).expect("runs");
+    regolith::run::run_scene(&scene, &regolith::run::RunOptions::quiet(out.clone())).expect("runs");
     let topics = common::read_validated(&out.join("recording.mcap"));
     assert_eq!(topics["/tf"].len(), 3);
     let tf = &topics["/tf"][0].1["transforms"];

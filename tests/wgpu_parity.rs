@@ -278,7 +278,7 @@ fn both(scene: &Scene, name: &str) -> [(regolith::run::Summary, std::path::PathB
         s.precision = Precision::F32;
         s.output.mcap = false;
         let out = common::out_dir(&format!("wgpu_parity_{name}_{b:?}"));
-        let summary = run_scene(&s, &RunOptions { out: out.clone(), quiet: true }).expect("run");
+        let summary = run_scene(&s, &RunOptions::quiet(out.clone())).expect("run");
         assert_eq!(summary.backend, if b == Backend::Cpu { "cpu" } else { "wgpu" });
         (summary, out)
     })

@@ -444,6 +444,18 @@ impl RigidWorld {
         self.bodies[b.0].extra = force;
     }
 
+    /// Sets a free body's velocity (m/s, rad/s), e.g. an impactor's speed at the start
+    /// (ignored for other motions: a prescribed body's is set by
+    /// [`Self::set_prescribed_velocity`]).
+    pub fn set_velocity(&mut self, b: BodyId, linvel: [f64; 3], angvel: [f64; 3]) {
+        let rec = &self.bodies[b.0];
+        if let Motion::Free = rec.motion {
+            let body = &mut self.world.bodies[rec.handle];
+            body.set_linvel(v3(linvel), true);
+            body.set_angvel(v3(angvel), true);
+        }
+    }
+
     /// Changes a prescribed body's velocity (ignored for other motions).
     pub fn set_prescribed_velocity(&mut self, b: BodyId, linvel: [f64; 3], angvel: [f64; 3]) {
         let rec = &mut self.bodies[b.0];

@@ -18,7 +18,7 @@ use regolith_coupling::{CouplingError, FsiBodyId, FsiSystem, SoilInit, grow_doma
 use regolith_fsi::rheology::{Material, ParamError};
 use regolith_fsi::{Real, SolverError, SphSolver};
 use regolith_rigid::{BodyId, JointId, Motion, RigidError, RigidWorld};
-use regolith_terrain::{RegionSpec, TerrainBuild, TerrainError, build_terrain};
+use regolith_terrain::{RegionSpec, SoilRegion, TerrainBuild, TerrainError, build_terrain};
 
 use crate::input::InputError;
 use crate::scene::{Backend, Scene};
@@ -133,6 +133,22 @@ pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, Terrai
         &regions,
         &mats64,
     )?;
+    let mut terrain = terrain;
+    for s in scene.soil.iter().filter(|s| s.velocity != [0.0; 3]) {
+        let (lo, hi) = crate::scene::region_bounds(&s.region);
+        for p in terrain.particles.iter_mut() {
+            let inside = match &s.region {
+                SoilRegion::Cylinder { base_center: c, radius, .. } => {
+                    (p.pos[0] - c[0]).powi(2) + (p.pos[1] - c[1]).powi(2) <= radius * radius
+                        && (lo[2]..=hi[2]).contains(&p.pos[2])
+                }
+                _ => (0..3).all(|a| (lo[a]..=hi[a]).contains(&p.pos[a])),
+            };
+            if inside {
+                p.vel = s.velocity;
+            }
+        }
+    }
     Ok((mats, terrain))
 }
 
@@ -182,6 +198,9 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
     let mut fsi_bodies = Vec::new();
     for b in &scene.bodies {
         let id = rigid.add_body(&b.desc).map_err(BuildError::rigid(&b.key))?;
+        if let Some(v) = b.initial_velocity {
+            rigid.set_velocity(id, v, [0.0; 3]);
+        }
         ids.push(id);
         if !b.fsi {
             continue;

@@ -6,6 +6,7 @@ mod check;
 mod element;
 mod inspect;
 mod run;
+mod study;
 
 use std::path::PathBuf;
 
@@ -89,9 +90,45 @@ pub enum TestArg {
     Oedometer,
 }
 
+/// Problem sizes of a study.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SizeArg {
+    /// What CI runs (minutes on 2 cores).
+    Ci,
+    /// The documented size (the case files as written).
+    Full,
+}
+
+/// Studies.
+#[derive(Debug, Subcommand)]
+pub enum StudyCommand {
+    /// Run the hard cases and check each against its `[[expect]]` bounds; writes
+    /// stability.md, stability.csv and stability.json (exit code 1 when a case fails).
+    Stability {
+        /// Cases to run (file stems, comma-separated; default: all).
+        #[arg(long, value_name = "NAME,...", value_delimiter = ',')]
+        cases: Vec<String>,
+        /// Problem size.
+        #[arg(long, value_enum, default_value_t = SizeArg::Ci)]
+        size: SizeArg,
+        /// Folder of case files.
+        #[arg(long, value_name = "DIR", default_value = "examples/hard")]
+        cases_dir: PathBuf,
+        /// Output folder.
+        #[arg(long, value_name = "DIR", default_value = "out/stability")]
+        out: PathBuf,
+    },
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Studies over shipped scenes: `stability` (the hard-case suite).
+    Study {
+        /// Which study.
+        #[command(subcommand)]
+        study: StudyCommand,
+    },
     /// Drive one material point through a laboratory test (calibration and verification).
     #[command(allow_negative_numbers = true)]
     Element {
@@ -226,5 +263,12 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             run::run(&scene, out.as_deref(), backend, precision, &sets, quiet)
         }
         Command::Inspect { recording } => inspect::run(&recording),
+        Command::Study { study: StudyCommand::Stability { cases, size, cases_dir, out } } => {
+            let size = match size {
+                SizeArg::Ci => "ci",
+                SizeArg::Full => "full",
+            };
+            study::stability_cmd(cases_dir, cases, size.into(), out)
+        }
     }
 }

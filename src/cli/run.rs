@@ -54,8 +54,9 @@ pub(super) fn run(
     // Ctrl-C stops the run at the next exchange; the outputs (and the recording) are finished.
     // A second handler cannot be installed (e.g. the CLI called twice in one process): the run
     // then simply has no graceful stop, which is not worth failing it for.
-    let _ = ctrlc::set_handler(crate::driver::request_stop);
-    let opts = RunOptions { out: out.clone(), quiet };
+    let opts = RunOptions { out: out.clone(), quiet, stop: crate::driver::StopToken::new() };
+    let token = opts.stop.clone();
+    let _ = ctrlc::set_handler(move || token.stop());
     let summary = run_scene(&scene, &opts).map_err(|e| match e {
         crate::driver::RunError::Interrupted { .. } => {
             Failure::Interrupted(format!("{e}; outputs in {}", out.display()))

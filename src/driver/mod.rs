@@ -27,6 +27,21 @@ pub enum RunError {
     /// The solver stopped.
     #[error("solver")]
     Solver(#[from] SolverError),
+    /// The solver stopped at a particle: `report` names it, its material, position, stress,
+    /// p_c and the step (what `run::run_scene` returns for a [`Self::Solver`] error).
+    #[error("{report}")]
+    Failed {
+        /// One line about the particle (the solver's error included).
+        report: String,
+        /// The solver's error (already in `report`, so not a `source`).
+        cause: SolverError,
+    },
+    /// A particle ran away: faster than `[simulation] runaway_speed`.
+    #[error("{report}")]
+    Runaway {
+        /// One line about the particle (as for [`Self::Failed`]).
+        report: String,
+    },
     /// Writing an output failed.
     #[error("writing {}", path.display())]
     Output {
@@ -51,7 +66,8 @@ impl RunError {
     }
 }
 
-/// Asks a run to stop at its next exchange. Clones share the flag.
+/// Asks a run to stop at its next exchange. Each run owns one (the CLI raises its run's
+/// token on Ctrl-C); clones share the flag, so a thread or a signal handler can hold one.
 #[derive(Clone, Debug, Default)]
 pub struct StopToken(Arc<AtomicBool>);
 
@@ -59,11 +75,6 @@ impl StopToken {
     /// A fresh, unraised token.
     pub fn new() -> Self {
         Self::default()
-    }
-    /// The process-wide token that [`request_stop`] (the CLI's Ctrl-C handler) raises.
-    pub fn global() -> Self {
-        static GLOBAL: std::sync::OnceLock<StopToken> = std::sync::OnceLock::new();
-        GLOBAL.get_or_init(StopToken::new).clone()
     }
     /// Raises it.
     pub fn stop(&self) {
@@ -73,11 +84,6 @@ impl StopToken {
     pub fn is_stopped(&self) -> bool {
         self.0.load(Ordering::SeqCst)
     }
-}
-
-/// Raises the process-wide [`StopToken::global`]: running simulations stop at the next exchange.
-pub fn request_stop() {
-    StopToken::global().stop();
 }
 
 /// What a run did, for the summary.
@@ -190,6 +196,23 @@ impl<'o, T: Real> Driver<'o, T> {
         }
         let remaining = self.stats.end_time - sim.time();
         let r = sim.step_max(Some(remaining))?;
+        if r.max_speed > sim.scene.runaway_speed {
+            let fluid = &sim.system.fluid;
+            let n = fluid.active();
+            let fastest = (0..n).max_by(|a, b| {
+                fluid.velocities()[*a].norm().as_f64().total_cmp(&fluid.velocities()[*b].norm().as_f64())
+            });
+            let what = fastest.map_or_else(String::new, |i| sim.particle_report(fluid.ids()[i]));
+            return Err(RunError::Runaway {
+                report: format!(
+                    "runaway particle: speed {:.3e} m/s above simulation.runaway_speed = {} m/s at step {} (t = {:.6e} s); {what}",
+                    r.max_speed,
+                    sim.scene.runaway_speed,
+                    fluid.steps(),
+                    sim.time()
+                ),
+            });
+        }
         let n = sim.system.fluid.active() as f64;
         let s = &mut self.stats;
         s.steps += u64::from(r.fluid_steps);

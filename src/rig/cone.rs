@@ -40,8 +40,12 @@ pub(super) fn cone<T: Real>(
         &[(names[0], row0[0]), (names[1], row0[1]), (names[2], 0.0), (names[3], 0.0)],
     )?;
     let mut curve = Vec::new();
+    let mut stopped = None;
     while sim.time() < sc.end_time * (1.0 - 1e-12) {
-        driver.step(&mut sim)?;
+        if let Err(e) = driver.step(&mut sim) {
+            stopped = Some(super::halt(e)?);
+            break;
+        }
         let st = sim.body_state(Body(body));
         let tip = st.origin[2] - 0.5 * height;
         let (tip_depth, base_depth) = (surface - tip, surface - (tip + height));
@@ -93,5 +97,6 @@ pub(super) fn cone<T: Real>(
         bekker: None,
         figures: vec![("cone_penetrometer".into(), crate::output::plot::Figure { panels: vec![force, ci] })],
         last: Some(sim),
+        stopped,
     })
 }

@@ -73,6 +73,18 @@ pub struct RigOutput<T: Real> {
     pub figures: Vec<(String, Figure)>,
     /// The last simulation (for the final particles).
     pub last: Option<Simulation<T>>,
+    /// Why the rig stopped early: a solver failure or a stop request. The series, report and
+    /// `last` hold everything up to that exchange (the interrupted run included).
+    pub stopped: Option<RunError>,
+}
+
+/// Splits an error of [`Driver::step`] into one that ends the rig with its outputs kept
+/// (a solver failure, a stop request: `Ok`) and one that ends it at once (`Err`).
+fn halt(e: RunError) -> Result<RunError, RunError> {
+    match e {
+        RunError::Solver(_) | RunError::Runaway { .. } | RunError::Interrupted { .. } => Ok(e),
+        e => Err(e),
+    }
 }
 
 /// Runs a rig with the run loop `driver` (which carries the observers).

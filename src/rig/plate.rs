@@ -42,6 +42,7 @@ pub(super) fn plate<T: Real>(
     let mut series: Option<Series> = None;
     let mut runs = Vec::new();
     let mut last: Option<Simulation<T>> = None;
+    let mut stopped = None;
     for size in sizes {
         let mut sc = scene.clone();
         let shape = match (&base, size) {
@@ -78,7 +79,10 @@ pub(super) fn plate<T: Real>(
         let mut curve = Vec::new();
         let (mut zmax, mut pmax) = (0.0_f64, 0.0_f64);
         while sim.time() < sc.end_time * (1.0 - 1e-12) {
-            driver.step(&mut sim)?;
+            if let Err(e) = driver.step(&mut sim) {
+                stopped = Some(super::halt(e)?);
+                break;
+            }
             let st = sim.body_state(Body(body));
             let sinkage = bottom0 - (st.origin[2] - offset);
             let p = sim.fsi_wrench(Body(body)).force[2] / area;
@@ -93,6 +97,9 @@ pub(super) fn plate<T: Real>(
         }
         runs.push(PlateRun { b, area, max_sinkage: zmax, max_pressure: pmax, curve });
         last = Some(sim);
+        if stopped.is_some() {
+            break;
+        }
     }
     let fit = bekker::fit(&runs.iter().map(|r| PlateCurve { b: r.b, points: r.curve.clone() }).collect::<Vec<_>>());
     let mut panel = crate::output::plot::Panel {
@@ -126,5 +133,6 @@ pub(super) fn plate<T: Real>(
         bekker: fit,
         figures: vec![("plate_sinkage".into(), crate::output::plot::Figure { panels: vec![panel] })],
         last,
+        stopped,
     })
 }

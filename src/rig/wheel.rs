@@ -5,7 +5,7 @@ use regolith_fsi::Real;
 use regolith_rigid::{BodyDesc, JointDesc, JointKind, MassSpec, Motion, Pose, ShapeDesc, VelocityMotor};
 use serde::Serialize;
 
-use super::{RigOutput, place_on_soil};
+use super::{RigOutput, halt, place_on_soil};
 use crate::build::BuildError;
 use crate::driver::{Driver, RunError};
 use crate::output::Series;
@@ -48,6 +48,7 @@ pub(super) fn wheel<T: Real>(
     let mut series: Option<Series> = None;
     let mut runs = Vec::new();
     let mut last: Option<Simulation<T>> = None;
+    let mut stopped = None;
     for slip in slips {
         let mut sc = scene.clone();
         sc.bodies[body].desc.motion = Motion::Free;
@@ -128,7 +129,10 @@ pub(super) fn wheel<T: Real>(
         driver.begin(&sim, multi.then_some(label))?;
         record(driver, &sim, [1.0, 0.0, 0.0, 0.0])?;
         while sim.time() < sc.end_time * (1.0 - 1e-12) {
-            driver.step(&mut sim)?;
+            if let Err(e) = driver.step(&mut sim) {
+                stopped = Some(halt(e)?);
+                break;
+            }
             let st = sim.body_state(Body(body));
             let w = sim.fsi_wrench(Body(body));
             let measured = 1.0 - st.linvel[0] / (omega * radius);
@@ -149,6 +153,9 @@ pub(super) fn wheel<T: Real>(
             sinkage: mean(|r| r.4),
         });
         last = Some(sim);
+        if stopped.is_some() {
+            break;
+        }
     }
     let mut figures = Vec::new();
     let s = series.clone().unwrap_or_default();
@@ -224,5 +231,5 @@ pub(super) fn wheel<T: Real>(
         "drive": match drive { WheelDrive::Slips(_) => serde_json::json!("slip"), WheelDrive::Tow(f) => serde_json::json!({"tow_force": f}) },
         "steady_state": runs,
     });
-    Ok(RigOutput { series: series.unwrap_or_default(), report, bekker: None, figures, last })
+    Ok(RigOutput { series: series.unwrap_or_default(), report, bekker: None, figures, last, stopped })
 }

@@ -7,13 +7,13 @@ mod summary;
 
 pub use summary::{BodySummary, Runout, SUMMARY_SCHEMA_VERSION, Summary};
 
-pub use crate::driver::{RunError, request_stop};
+pub use crate::driver::{RunError, StopToken};
 
 use std::path::PathBuf;
 
 use regolith_fsi::Real;
 
-use crate::driver::{Driver, Progress, StopToken};
+use crate::driver::{Driver, Observer, Progress};
 #[cfg(feature = "mcap")]
 use crate::output::Recorder;
 use crate::output::plot::DRAWS_PLOTS;
@@ -28,15 +28,44 @@ pub struct RunOptions {
     pub out: PathBuf,
     /// No progress lines.
     pub quiet: bool,
+    /// Raised, it stops this run at its next exchange (what the CLI's Ctrl-C does).
+    pub stop: StopToken,
 }
 
-/// Runs a scene and writes its outputs. On a solver failure the summary and final particles
-/// are still written (with `nan_detected` / `error` set) before the error is returned; so
-/// they are when [`request_stop`] was called (Ctrl-C), which returns [`RunError::Interrupted`].
+impl RunOptions {
+    /// Writes to `out`, with progress lines and a fresh stop token.
+    pub fn new(out: impl Into<PathBuf>) -> Self {
+        Self { out: out.into(), quiet: false, stop: StopToken::new() }
+    }
+    /// Writes to `out`, without progress lines, with a fresh stop token.
+    pub fn quiet(out: impl Into<PathBuf>) -> Self {
+        Self { quiet: true, ..Self::new(out) }
+    }
+}
+
+/// An observer that watches nothing.
+struct Nobody;
+impl<T: Real> Observer<T> for Nobody {}
+
+/// Runs a scene and writes its outputs. When the solver fails at a particle, or a particle
+/// runs away, the summary (with `nan_detected` / `error` set), the final particles, the series,
+/// the rig's curves and the recording are still written up to that exchange, and
+/// [`RunError::Failed`] or [`RunError::Runaway`] names the particle; when `opts.stop` is
+/// raised (Ctrl-C) they are written and [`RunError::Interrupted`] is returned.
 pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError> {
+    run_scene_observed(scene, opts, &mut Nobody)
+}
+
+/// [`run_scene`] with one more observer (a study's probe), told of every run and exchange
+/// after the recording and the progress bar.
+pub fn run_scene_observed<O: Observer<f32> + Observer<f64>>(
+    scene: &Scene,
+    opts: &RunOptions,
+    extra: &mut O,
+) -> Result<Summary, RunError> {
     match scene.precision {
-        Precision::F32 => run_t::<f32>(scene, opts),
-        Precision::F64 => run_t::<f64>(scene, opts),
+        Precision::F32 => run_t::<f32>(scene, opts, extra),
+        Precision::F64 => run_t::<f64>(scene, opts, extra),
     }
 }
 
@@ -56,7 +85,7 @@ impl<T: Real> Default for Ran<T> {
     }
 }
 
-fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError> {
+fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>) -> Result<Summary, RunError> {
     std::fs::create_dir_all(&opts.out).map_err(|e| RunError::output(&opts.out, e))?;
     // Scene validation refuses `output.mcap = true` in a build without the `mcap` feature.
     #[cfg(feature = "mcap")]
@@ -66,9 +95,10 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
     let mut terrain_series = TerrainSeries::default();
     let mut failure = None;
     let mut interrupted = None;
-    // A solver error or a stop ends the run with its outputs written; other errors end it at once.
+    // A solver error, a runaway or a stop ends the run with its outputs written; other errors
+    // end it at once.
     let mut stopped = |e: RunError| match e {
-        RunError::Solver(e) => {
+        RunError::Solver(_) | RunError::Runaway { .. } => {
             failure = Some(e);
             Ok(())
         }
@@ -78,26 +108,25 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
         }
         e => Err(e),
     };
-    let mut driver = Driver::<T>::new(scene.end_time, StopToken::global());
+    let mut driver = Driver::<T>::new(scene.end_time, opts.stop.clone());
     #[cfg(feature = "mcap")]
     if let Some(r) = recorder.as_mut() {
         driver.observe(r);
     }
     driver.observe(&mut progress);
+    driver.observe(extra);
     let ran = if let Some(spec) = &scene.rig {
-        match crate::rig::run_rig::<T>(scene, spec, &mut driver) {
-            Ok(out) => Ran {
-                sim: out.last,
-                series: Some(out.series),
-                rig: Some(out.report),
-                bekker: out.bekker,
-                figures: out.figures,
-                initial: None,
-            },
-            Err(e) => {
-                stopped(e)?;
-                Ran::default()
-            }
+        let out = crate::rig::run_rig::<T>(scene, spec, &mut driver)?;
+        if let Some(e) = out.stopped {
+            stopped(e)?;
+        }
+        Ran {
+            sim: out.last,
+            series: Some(out.series),
+            rig: Some(out.report),
+            bekker: out.bekker,
+            figures: out.figures,
+            initial: None,
         }
     } else {
         let mut sim = Simulation::<T>::new(scene)?;
@@ -116,6 +145,22 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
     let stats = driver.stats.clone();
     drop(driver);
     let Ran { sim, series, rig, bekker, mut figures, initial } = ran;
+    // Name the particle a solver failure stopped at.
+    let failure = failure.map(|e| match (e, &sim) {
+        (RunError::Solver(source), Some(s)) => {
+            let particle = match &source {
+                regolith_fsi::SolverError::NonFinite { particle, .. }
+                | regolith_fsi::SolverError::Rheology { particle, .. } => Some(*particle),
+                regolith_fsi::SolverError::Setup(_) => None,
+            };
+            let report = match particle {
+                Some(id) => format!("solver failed: {source}; {}", s.particle_report(id)),
+                None => format!("solver failed: {source}"),
+            };
+            RunError::Failed { report, cause: source }
+        }
+        (e, _) => e,
+    });
     let series = series.or_else(|| initial.is_some().then_some(terrain_series.0));
     let mut outputs = Vec::new();
     #[cfg(feature = "mcap")]
@@ -145,10 +190,13 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
         mass_final: fluid.map_or(0.0, |f| f.active_mass()),
         escaped_particles: fluid.map_or(0, |f| f.len() - f.active()),
         nan_detected: matches!(
-            failure,
-            Some(regolith_fsi::SolverError::NonFinite { .. })
-                | Some(regolith_fsi::SolverError::Rheology {
-                    source: regolith_fsi::rheology::RheologyError::NonFinite { .. },
+            &failure,
+            Some(RunError::Failed { cause: regolith_fsi::SolverError::NonFinite { .. }, .. })
+                | Some(RunError::Failed {
+                    cause: regolith_fsi::SolverError::Rheology {
+                        source: regolith_fsi::rheology::RheologyError::NonFinite { .. },
+                        ..
+                    },
                     ..
                 })
         ),
@@ -194,7 +242,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions) -> Result<Summary, RunError>
     summary.outputs = outputs.iter().map(|p| p.display().to_string()).collect();
     write_json(&summary_path, &summary)?;
     match (failure, interrupted) {
-        (Some(e), _) => Err(RunError::Solver(e)),
+        (Some(e), _) => Err(e),
         (None, Some(time)) => Err(RunError::Interrupted { time }),
         (None, None) => Ok(summary),
     }

@@ -114,8 +114,17 @@ pub(super) fn resolve_body(
     if orientation.iter().any(|x| !x.is_finite()) {
         return Err(e("orientation", "must be finite roll, pitch, yaw in degrees".into()));
     }
-    let motion = match b.motion.clone().unwrap_or(MotionFile::Free) {
-        MotionFile::Free => Motion::Free,
+    let mut initial_velocity = None;
+    let motion = match b.motion.clone().unwrap_or(MotionFile::Free { velocity: None }) {
+        MotionFile::Free { velocity } => {
+            if let Some(v) = velocity {
+                if v.iter().any(|x| !x.is_finite()) {
+                    return Err(e("motion.velocity", "must be finite [vx, vy, vz] in m/s".into()));
+                }
+                initial_velocity = Some(v);
+            }
+            Motion::Free
+        }
         MotionFile::Fixed => Motion::Fixed,
         MotionFile::Prescribed { linear_velocity, angular_velocity } => {
             let l = linear_velocity.unwrap_or([0.0; 3]);
@@ -151,5 +160,6 @@ pub(super) fn resolve_body(
         bce_layers: layers as usize,
         key,
         visual: None,
+        initial_velocity,
     })
 }

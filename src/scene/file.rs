@@ -21,6 +21,13 @@ pub(crate) struct SceneFile {
     pub output: Option<OutputFile>,
     #[serde(default)]
     pub vehicles: Vec<super::vehicle::VehicleFile>,
+    /// What a correct run shows (`[[expect]]`), read by `regolith study stability`; a run
+    /// ignores it.
+    #[serde(default, rename = "expect")]
+    pub _expect: Option<serde::de::IgnoredAny>,
+    /// Problem sizes of a study case (`[study.ci]`), read by `regolith study`; a run ignores it.
+    #[serde(rename = "study")]
+    pub _study: Option<serde::de::IgnoredAny>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -47,6 +54,8 @@ pub(crate) struct SimulationFile {
     pub backend: Option<BackendName>,
     pub precision: Option<PrecisionName>,
     pub exchange_interval: Option<f64>,
+    pub allow_unstable_dt: Option<bool>,
+    pub runaway_speed: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
@@ -139,6 +148,7 @@ pub(crate) struct SoilBlockFile {
     pub base_center: Option<[f64; 3]>,
     pub radius: Option<f64>,
     pub height: Option<f64>,
+    pub velocity: Option<[f64; 3]>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
@@ -212,7 +222,7 @@ pub(crate) enum ShapeFile {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub(crate) enum MotionFile {
-    Free,
+    Free { velocity: Option<[f64; 3]> },
     Fixed,
     Prescribed { linear_velocity: Option<[f64; 3]>, angular_velocity: Option<[f64; 3]> },
 }

@@ -5,7 +5,7 @@
 //! ```toml
 //! [simulation]
 //! end_time = 1.0            # s
-//! dt = "auto"               # or a fixed step in s
+//! dt = "auto"               # or a fixed step in s, at most 0.5 h / c (refused above)
 //! integrator = "rk2"        # or "euler"
 //! gravity = [0.0, 0.0, -9.81]
 //! backend = "cpu"           # "auto" | "cpu" | "wgpu"
@@ -52,7 +52,8 @@ use rig::resolve_rig;
 use settings::{Settings, resolve_settings};
 use soil::resolve_soil;
 pub use types::{
-    Backend, BodySpec, OutputSpec, PlateControl, Precision, RigSpec, Scene, SceneMaterial, SoilSpec, WheelDrive,
+    Backend, BodySpec, DEFAULT_RUNAWAY_SPEED, OutputSpec, PlateControl, Precision, RigSpec, Scene, SceneMaterial,
+    SoilSpec, WheelDrive,
 };
 
 pub use vehicle::{Profile, VehicleSpec, WheelSpec};
@@ -60,7 +61,7 @@ pub use vehicle::{Profile, VehicleSpec, WheelSpec};
 use std::path::{Path, PathBuf};
 
 use regolith_fsi::config::{FreeSurfaceStress, Integrator, KernelKind, Shifting, SolverConfig, TimeStep};
-use regolith_fsi::rheology::{MaterialParams, Rheology};
+use regolith_fsi::rheology::MaterialParams;
 use regolith_terrain::{Aabb, Heightmap, SoilRegion, Surface};
 
 pub use overrides::parse_set;
@@ -122,6 +123,12 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         resolve_settings(file.simulation.as_ref(), file.sph.as_ref(), &e)?;
     let (spacing, bce_layers) = (solver.spacing, solver.bce_layers);
     let (materials, container, soil) = resolve_soil(path, source, dir, &file, spacing, &e)?;
+    let allow_unstable = file.simulation.as_ref().and_then(|s| s.allow_unstable_dt).unwrap_or(false);
+    settings::check_fixed_step(&solver, &materials, allow_unstable, &e)?;
+    let runaway_speed = file.simulation.as_ref().and_then(|s| s.runaway_speed).unwrap_or(DEFAULT_RUNAWAY_SPEED);
+    if !(runaway_speed.is_finite() && runaway_speed > 0.0) {
+        return Err(e("simulation.runaway_speed", format!("must be > 0 m/s (got {runaway_speed})")));
+    }
     let mut bodies = Vec::new();
     for (i, b) in file.bodies.iter().enumerate() {
         let spec = resolve_body(path, source, dir, i, b, bce_layers, &bodies)?;
@@ -152,6 +159,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         bodies,
         rig,
         exchange_interval,
+        runaway_speed,
         output,
         vehicles,
     })
@@ -168,9 +176,4 @@ pub fn region_bounds(r: &SoilRegion) -> ([f64; 3], [f64; 3]) {
             ([c[0] - radius, c[1] - radius, c[2]], [c[0] + radius, c[1] + radius, c[2] + height])
         }
     }
-}
-
-/// The rheology of each material of a scene, in `f64` (for reporting).
-pub fn rheologies(scene: &Scene) -> Vec<Rheology<f64>> {
-    scene.materials.iter().filter_map(|m| m.params.build::<f64>().ok()).map(|m| m.rheology).collect()
 }

@@ -178,3 +178,49 @@ pub(super) fn resolve_settings(
     }
     Ok(Settings { end_time, backend, precision, precision_set, solver, exchange_interval })
 }
+
+/// Largest fixed step, as a fraction of `h / c` (c the stiffest material's P-wave speed): half
+/// the smoothing length per step for the fastest elastic wave. The adaptive step stays at or
+/// below CFL 0.3 of it; explicit SPH with RK2 is not stable much above this (the stability
+/// suite's `fixed_step_above_limit` case runs a step past it to show the blow-up is reported).
+pub const FIXED_STEP_CFL_LIMIT: f64 = 0.5;
+
+/// Refuses a fixed `simulation.dt` above [`FIXED_STEP_CFL_LIMIT`] `· h / c` unless the scene
+/// says `allow_unstable_dt = true` (for tests of failure handling).
+pub(super) fn check_fixed_step(
+    solver: &SolverConfig,
+    materials: &[SceneMaterial],
+    allow: bool,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<(), InputError> {
+    let TimeStep::Fixed(dt) = solver.time_step else {
+        if allow {
+            return Err(e("simulation.allow_unstable_dt", "applies to a fixed dt only; remove it".into()));
+        }
+        return Ok(());
+    };
+    let stiffest = materials
+        .iter()
+        .filter_map(|m| m.params.build::<f64>().ok().map(|b| (m.name.as_str(), b.wave_speed())))
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    let Some((name, c)) = stiffest else {
+        return Ok(());
+    };
+    let limit = FIXED_STEP_CFL_LIMIT * solver.h() / c;
+    if dt > limit && !allow {
+        return Err(e(
+            "simulation.dt",
+            format!(
+                "{dt:e} s is above the stable limit {FIXED_STEP_CFL_LIMIT} h / c = {limit:.3e} s (h = {:.4} m, c = {c:.1} m/s of material \"{name}\"); use dt = \"auto\", a step ≤ {limit:.3e} s, or allow_unstable_dt = true to run it anyway",
+                solver.h()
+            ),
+        ));
+    }
+    if allow && dt <= limit {
+        return Err(e(
+            "simulation.allow_unstable_dt",
+            format!("is set but dt = {dt:e} s is within the stable limit {limit:.3e} s; remove it"),
+        ));
+    }
+    Ok(())
+}

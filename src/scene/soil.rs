@@ -129,7 +129,12 @@ pub(super) fn resolve_soil(
                 Surface::Heightmap(map)
             }
         };
-        soil.push(SoilSpec { material, region: SoilRegion::Bed { container: c, surface }, key: "terrain".into() });
+        soil.push(SoilSpec {
+            material,
+            region: SoilRegion::Bed { container: c, surface },
+            key: "terrain".into(),
+            velocity: [0.0; 3],
+        });
     }
     for (i, b) in file.soil_blocks.iter().enumerate() {
         let k = |s: &str| format!("soil_blocks[{i}].{s}");
@@ -198,7 +203,25 @@ pub(super) fn resolve_soil(
         } else {
             return Err(e(&k("shape"), "soil blocks need a [container] to stand in (walls and floor)".into()));
         }
-        soil.push(SoilSpec { material, region, key: format!("soil_blocks[{i}]") });
+        let velocity = b.velocity.unwrap_or([0.0; 3]);
+        if velocity.iter().any(|v| !v.is_finite()) {
+            return Err(e(&k("velocity"), "must be finite [vx, vy, vz] in m/s".into()));
+        }
+        // Regions may not overlap: which one a particle would belong to would be a silent choice.
+        let (lo, hi) = region_bounds(&region);
+        for other in &soil {
+            let (a, b) = region_bounds(&other.region);
+            if (0..3).all(|ax| lo[ax].max(a[ax]) < hi[ax].min(b[ax]) - 1e-9 * spacing) {
+                return Err(e(
+                    &k("shape"),
+                    format!(
+                        "overlaps {} (bounds [{a:?} .. {b:?}]); soil regions must not overlap: move the block or lower the terrain",
+                        other.key
+                    ),
+                ));
+            }
+        }
+        soil.push(SoilSpec { material, region, key: format!("soil_blocks[{i}]"), velocity });
     }
     if soil.is_empty() {
         return Err(InputError::file(path, "the scene has no soil: add [terrain] or [[soil_blocks]]"));

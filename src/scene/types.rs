@@ -61,6 +61,8 @@ pub struct SoilSpec {
     pub region: SoilRegion,
     /// The key it came from (`terrain`, `soil_blocks[2]`), for messages.
     pub key: String,
+    /// Initial velocity of its particles (m/s; `soil_blocks[i].velocity`, the bed starts at rest).
+    pub velocity: [f64; 3],
 }
 
 /// A body of a scene.
@@ -76,6 +78,8 @@ pub struct BodySpec {
     pub key: String,
     /// What to draw in place of the collision shape (a URDF link's visual geometry).
     pub visual: Option<ShapeDesc>,
+    /// A free body's velocity at the start (m/s; `motion = { type = "free", velocity = … }`).
+    pub initial_velocity: Option<[f64; 3]>,
 }
 
 /// How a plate is driven.
@@ -133,6 +137,11 @@ pub enum RigSpec {
     },
 }
 
+/// Default `[simulation] runaway_speed` (m/s): five times the fastest soil of the stability
+/// suite (a 20 m/s jet at a wall); soil moving at 100 m/s in a terramechanics scene means the
+/// solution has already diverged.
+pub const DEFAULT_RUNAWAY_SPEED: f64 = 100.0;
+
 /// A validated scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -161,6 +170,9 @@ pub struct Scene {
     pub rig: Option<RigSpec>,
     /// Soil–body exchange interval (s).
     pub exchange_interval: f64,
+    /// A particle faster than this (m/s) stops the run as a runaway (`[simulation]
+    /// runaway_speed`, default [`DEFAULT_RUNAWAY_SPEED`]).
+    pub runaway_speed: f64,
     /// What the run records.
     pub output: OutputSpec,
     /// URDF vehicles (their links are in `bodies`).

@@ -268,6 +268,7 @@ pub(crate) fn resolve_vehicle(
             bce_layers: layers as usize,
             key: format!("{key} link `{}`", link.name),
             visual: combine(&link.visual),
+            initial_velocity: None,
         });
     }
     for b in &bodies[first_body..] {

@@ -1,0 +1,364 @@
+//! `regolith study stability`: runs the hard cases of `examples/hard/` at a size, checks each
+//! against its `[[expect]]` bounds, and writes the table (Markdown, CSV, JSON).
+//!
+//! Besides its own checks, every case that runs is checked for two things a correct run
+//! always shows: it ends without a solver failure or runaway (unless the case injects one on
+//! purpose, `reported_failure`), and mass is conserved (every particle is still there,
+//! in the domain or counted as escaped, with its mass unchanged).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::expect::{Expectation, Metric, read_case};
+use super::probe::{Figures, Probe};
+use super::{StudyError, write_text};
+use crate::driver::RunError;
+use crate::input::{InputError, read_text};
+use crate::run::{RunOptions, run_scene_observed};
+use crate::scene::{Scene, load_scene};
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct StabilityOptions {
+    /// The folder of case files (`*.toml`).
+    pub cases_dir: PathBuf,
+    /// Case names (file stems) to run; empty: all.
+    pub cases: Vec<String>,
+    /// `ci` or `full`.
+    pub size: String,
+    /// Output folder: one sub-folder per case, and the tables.
+    pub out: PathBuf,
+    /// No line per case on stderr.
+    pub quiet: bool,
+}
+
+/// One check's outcome.
+#[derive(Clone, Debug, Serialize)]
+pub struct CheckResult {
+    /// The metric (or `finite`, `mass` for the checks every run gets).
+    pub check: String,
+    /// The bound.
+    pub bound: String,
+    /// The measured figure (NaN: not measured).
+    pub measured: f64,
+    /// Its unit.
+    pub unit: String,
+    /// Whether it holds.
+    pub pass: bool,
+    /// Whether it counts for the case's verdict (a report-only comparison does not).
+    pub gating: bool,
+    /// Why the bound is physical.
+    pub why: String,
+}
+
+/// One case's outcome.
+#[derive(Clone, Debug, Serialize)]
+pub struct CaseResult {
+    /// File stem.
+    pub case: String,
+    /// The file.
+    pub file: String,
+    /// Size run.
+    pub size: String,
+    /// All checks passed.
+    pub pass: bool,
+    /// The checks.
+    pub checks: Vec<CheckResult>,
+    /// Soil particles.
+    pub particles: u64,
+    /// Soil steps.
+    pub steps: u64,
+    /// Simulated time (s).
+    pub sim_time: f64,
+    /// Wall-clock time (s).
+    pub wall_s: f64,
+    /// How the run ended, when not normally: the refusal or the failure report.
+    pub ended: Option<String>,
+}
+
+/// The case files of a folder, by stem, sorted.
+pub fn case_files(dir: &Path) -> Result<Vec<(String, PathBuf)>, InputError> {
+    let entries = std::fs::read_dir(dir)
+        .map_err(|e| InputError::flag("--cases-dir", format!("cannot read {}: {e}", dir.display())))?;
+    let mut out: Vec<(String, PathBuf)> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .filter_map(|p| Some((p.file_stem()?.to_string_lossy().into_owned(), p)))
+        .collect();
+    out.sort();
+    if out.is_empty() {
+        return Err(InputError::flag("--cases-dir", format!("{} holds no *.toml case", dir.display())));
+    }
+    Ok(out)
+}
+
+/// Runs the cases and writes `stability.md`, `stability.csv` and `stability.json` to
+/// `opts.out`. A case that fails its bounds is reported, not an error.
+pub fn stability(opts: &StabilityOptions) -> Result<Vec<CaseResult>, StudyError> {
+    if !super::expect::SIZES.contains(&opts.size.as_str()) {
+        return Err(InputError::flag("--size", format!("\"{}\" is not a size; allowed: ci, full", opts.size)).into());
+    }
+    let all = case_files(&opts.cases_dir)?;
+    for c in &opts.cases {
+        if !all.iter().any(|(n, _)| n == c) {
+            let names: Vec<&str> = all.iter().map(|(n, _)| n.as_str()).collect();
+            return Err(InputError::flag("--cases", format!("no case \"{c}\"; cases: {}", names.join(", "))).into());
+        }
+    }
+    // Read every chosen case first: a wrong file is an input error before anything runs.
+    let mut chosen = Vec::new();
+    for (name, path) in all {
+        if opts.cases.is_empty() || opts.cases.contains(&name) {
+            let text = read_text(&path)?;
+            let spec = read_case(&path, &text)?;
+            chosen.push((name, path, spec));
+        }
+    }
+    std::fs::create_dir_all(&opts.out).map_err(|e| StudyError::output(&opts.out, e))?;
+    let mut results = Vec::new();
+    for (name, path, spec) in chosen {
+        let sets = spec.sizes.get(&opts.size).cloned().unwrap_or_default();
+        let r = run_case(&name, &path, &opts.size, &sets, &spec.expect, &opts.out.join(&name))?;
+        if !opts.quiet {
+            eprintln!(
+                "{:<32} {:<4} {:>7.1} s  {}",
+                r.case,
+                if r.pass { "pass" } else { "FAIL" },
+                r.wall_s,
+                r.checks
+                    .iter()
+                    .map(|c| format!("{} {} ({})", c.check, fmt_value(c.measured), c.bound))
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            );
+        }
+        results.push(r);
+    }
+    write_tables(&results, &opts.out)?;
+    Ok(results)
+}
+
+fn run_case(
+    name: &str,
+    path: &Path,
+    size: &str,
+    sets: &[(String, toml::Value)],
+    expect: &[Expectation],
+    out: &Path,
+) -> Result<CaseResult, StudyError> {
+    let start = Instant::now();
+    let mut result = CaseResult {
+        case: name.into(),
+        file: path.display().to_string(),
+        size: size.into(),
+        pass: false,
+        checks: Vec::new(),
+        particles: 0,
+        steps: 0,
+        sim_time: 0.0,
+        wall_s: 0.0,
+        ended: None,
+    };
+    let refused = expect.iter().find(|x| x.metric == Metric::Refused);
+    let scene = match (load_scene(path, sets), refused) {
+        (Err(e), Some(x)) => {
+            let text = e.to_string();
+            let holds = x.contains.as_ref().is_some_and(|c| text.contains(c.as_str()));
+            result.checks.push(check(x, if holds { 1.0 } else { 0.0 }, holds));
+            result.ended = Some(text);
+            result.pass = holds;
+            result.wall_s = start.elapsed().as_secs_f64();
+            return Ok(result);
+        }
+        (Err(e), None) => return Err(e.into()),
+        (Ok(_), Some(x)) => {
+            result.checks.push(check(x, 0.0, false));
+            result.ended = Some("the scene was accepted; it should have been refused".into());
+            result.wall_s = start.elapsed().as_secs_f64();
+            return Ok(result);
+        }
+        (Ok(s), None) => s,
+    };
+    let mut probe = Probe::default();
+    let outcome = run_scene_observed(&scene, &RunOptions::quiet(out), &mut probe);
+    let failure = match outcome {
+        Ok(_) => None,
+        Err(e @ (RunError::Failed { .. } | RunError::Runaway { .. })) => Some(e.to_string()),
+        Err(e) => return Err(StudyError::Run { case: name.into(), source: e }),
+    };
+    result.wall_s = start.elapsed().as_secs_f64();
+    let summary: serde_json::Value = std::fs::read(out.join("summary.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok())
+        .ok_or_else(|| StudyError::output(&out.join("summary.json"), "missing or unreadable after the run"))?;
+    let num = |k: &str| summary[k].as_f64().unwrap_or(f64::NAN);
+    result.particles = summary["particles"].as_u64().unwrap_or(0);
+    result.steps = summary["steps"].as_u64().unwrap_or(0);
+    result.sim_time = num("sim_time");
+    let expects_failure = expect.iter().any(|x| x.metric == Metric::ReportedFailure);
+    if !expects_failure {
+        result.checks.push(CheckResult {
+            check: "finite".into(),
+            bound: "no failure".into(),
+            measured: if failure.is_some() { 1.0 } else { 0.0 },
+            unit: "failures".into(),
+            pass: failure.is_none(),
+            gating: true,
+            why: "a stable scheme ends without a non-finite value or a runaway particle".into(),
+        });
+    }
+    let figures = probe.figures();
+    if let Some(m) = probe.mass_error() {
+        result.checks.push(CheckResult {
+            check: "mass".into(),
+            bound: "≤ 1e-9".into(),
+            measured: m,
+            unit: "relative".into(),
+            pass: m <= 1e-9,
+            gating: true,
+            why: "particles carry constant mass: what is in the domain plus what escaped is what was generated".into(),
+        });
+    }
+    for x in expect {
+        let value = measure(x, &scene, figures.as_ref(), &summary, failure.as_deref());
+        result.checks.push(check(x, value, x.holds(value)));
+    }
+    result.ended = failure;
+    result.pass = result.checks.iter().all(|c| c.pass || !c.gating);
+    Ok(result)
+}
+
+fn check(x: &Expectation, measured: f64, pass: bool) -> CheckResult {
+    let body = x.body.as_ref().map_or_else(String::new, |b| format!(" ({b})"));
+    CheckResult {
+        check: format!("{}{body}", x.metric.name()),
+        bound: x.bound_text(),
+        measured,
+        unit: x.metric.unit().into(),
+        pass,
+        gating: !x.report_only,
+        why: x.why.clone(),
+    }
+}
+
+/// The figure a check reads (NaN when it cannot be measured, which fails the check).
+fn measure(
+    x: &Expectation,
+    scene: &Scene,
+    f: Option<&Figures>,
+    summary: &serde_json::Value,
+    failure: Option<&str>,
+) -> f64 {
+    let num = |k: &str| summary[k].as_f64().unwrap_or(f64::NAN);
+    if x.metric == Metric::ReportedFailure {
+        // A report names the particle and its state.
+        let reported = failure.is_some_and(|r| r.contains("particle ") && r.contains("p_c = "));
+        return if reported { 1.0 } else { 0.0 };
+    }
+    let Some(f) = f else {
+        return f64::NAN;
+    };
+    let body =
+        |k: usize| x.body.as_ref().and_then(|b| f.bodies.iter().find(|(n, _)| n == b)).map_or(f64::NAN, |(_, v)| v[k]);
+    match x.metric {
+        Metric::MaxSoilSpeed => f.max_soil_speed,
+        Metric::FinalSoilSpeed => f.final_soil_speed,
+        Metric::EscapedFraction => num("escaped_particles") / num("particles"),
+        Metric::Leaked => f.leaked as f64,
+        Metric::InsideBodies => f.inside_bodies as f64,
+        Metric::KeGrowth => f.ke_growth,
+        Metric::RmsSpeedFinal => f.rms_speed_final,
+        Metric::MaxDisplacement => f.max_displacement,
+        Metric::BodyZ => body(0),
+        Metric::BodySpeed => body(1),
+        Metric::BodyDepth => body(2),
+        Metric::UeharaRatio => uehara_ratio(x, scene, f).unwrap_or(f64::NAN),
+        Metric::ReportedFailure | Metric::Refused => f64::NAN,
+    }
+}
+
+/// Penetration depth of a sphere over Uehara et al. (2003, PRL 90, 194301):
+/// `d = 0.14/μ (ρb/ρg)^½ D^(2/3) H^(1/3)`, with `H = h + d` the total drop distance (`h` the
+/// height that gives the impact speed, `v²/2g`), μ = tan φ of the bed (their μ is the tangent
+/// of the angle of repose) and ρg the bed's bulk density.
+fn uehara_ratio(x: &Expectation, scene: &Scene, f: &Figures) -> Option<f64> {
+    let (_, shape, v0, mass) = f.shapes.iter().find(|s| Some(&s.0) == x.body.as_ref())?;
+    let regolith_rigid::ShapeDesc::Sphere { radius } = shape else {
+        return None;
+    };
+    let soil = scene.materials.get(scene.soil.first()?.material)?.params.build::<f64>().ok()?;
+    let g = scene.solver.gravity.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let speed2: f64 = v0.iter().map(|v| v * v).sum();
+    let rho_b = mass / (4.0 / 3.0 * std::f64::consts::PI * radius.powi(3));
+    let mu = soil.friction_angle_deg.to_radians().tan();
+    let a = 0.14 / mu * (rho_b / soil.density).sqrt() * (2.0 * radius).powf(2.0 / 3.0);
+    let h = speed2 / (2.0 * g);
+    let mut d = a * h.cbrt();
+    for _ in 0..50 {
+        d = a * (h + d).cbrt();
+    }
+    let depth = f.bodies.iter().find(|(n, _)| Some(n) == x.body.as_ref())?.1[2];
+    Some(depth / d)
+}
+
+fn fmt_value(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        format!("{v}")
+    } else if v.abs() >= 1e4 || v.abs() < 1e-3 {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
+/// Writes `stability.md`, `.csv` and `.json` to `out`; returns their paths.
+pub fn write_tables(results: &[CaseResult], out: &Path) -> Result<Vec<PathBuf>, StudyError> {
+    let passed = results.iter().filter(|r| r.pass).count();
+    let mut md = format!(
+        "# Stability suite\n\n{passed} of {} cases pass. Size `{}`. Each row is one check: the figure measured, the bound a correct run keeps, and why.\n\n\
+         | case | check | measured | bound | verdict | particles | steps | wall (s) | why |\n|---|---|---|---|---|---|---|---|---|\n",
+        results.len(),
+        results.first().map_or("", |r| r.size.as_str())
+    );
+    let mut csv = String::from("case,check,measured,unit,bound,verdict,particles,steps,sim_time_s,wall_s\n");
+    for r in results {
+        for c in &r.checks {
+            let verdict = match (c.pass, c.gating) {
+                (true, true) => "pass",
+                (false, true) => "FAIL",
+                (true, false) => "in band (reported)",
+                (false, false) => "MISS (reported)",
+            };
+            md.push_str(&format!(
+                "| {} | {} | {} {} | {} | {} | {} | {} | {:.1} | {} |\n",
+                r.case,
+                c.check,
+                fmt_value(c.measured),
+                c.unit,
+                c.bound,
+                verdict,
+                r.particles,
+                r.steps,
+                r.wall_s,
+                c.why.replace('|', "/")
+            ));
+            csv.push_str(&format!(
+                "{},{},{},{},\"{}\",{},{},{},{},{:.3}\n",
+                r.case, c.check, c.measured, c.unit, c.bound, verdict, r.particles, r.steps, r.sim_time, r.wall_s
+            ));
+        }
+        if let Some(e) = &r.ended {
+            md.push_str(&format!("| {} | ended | {} | | | | | | |\n", r.case, e.replace('|', "/")));
+        }
+    }
+    let total: f64 = results.iter().map(|r| r.wall_s).sum();
+    md.push_str(&format!("\nTotal wall time {total:.1} s.\n"));
+    let paths = [out.join("stability.md"), out.join("stability.csv"), out.join("stability.json")];
+    write_text(&paths[0], &md)?;
+    write_text(&paths[1], &csv)?;
+    let json = serde_json::to_string_pretty(results).map_err(|e| StudyError::output(&paths[2], e))?;
+    write_text(&paths[2], &json)?;
+    Ok(paths.to_vec())
+}
