@@ -180,3 +180,25 @@ fn study_case_sections_are_checked() {
     assert!(ok.expect[0].holds(0.02) && !ok.expect[0].holds(0.0) && !ok.expect[0].holds(f64::NAN));
     assert_eq!(ok.sizes["ci"].len(), 1);
 }
+
+#[test]
+fn every_hard_case_is_a_valid_case_and_scene() {
+    use regolith::study::expect::{Metric, read_case};
+    use regolith::study::stability::case_files;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hard");
+    let cases = case_files(&dir).expect("cases");
+    assert!(cases.len() >= 16, "{} hard cases", cases.len());
+    for (name, path) in cases {
+        let text = std::fs::read_to_string(&path).expect("read");
+        let spec = read_case(&path, &text).unwrap_or_else(|e| panic!("{e}"));
+        let refused = spec.expect.iter().any(|x| x.metric == Metric::Refused);
+        for size in ["ci", "full"] {
+            let sets = spec.sizes.get(size).cloned().unwrap_or_default();
+            match (regolith::scene::load_scene(&path, &sets), refused) {
+                (Ok(_), false) | (Err(_), true) => {}
+                (Ok(_), true) => panic!("{name} ({size}): accepted, but it expects a refusal"),
+                (Err(e), false) => panic!("{name} ({size}): {e}"),
+            }
+        }
+    }
+}

@@ -155,6 +155,10 @@ pub struct CaseSpec {
     pub expect: Vec<Expectation>,
     /// Per size (`ci`, `full`): the `--set` overrides that make the case that size.
     pub sizes: BTreeMap<String, Vec<(String, toml::Value)>>,
+    /// `[study] known_failure = "why"`: a defect the case exposes and that is not fixed yet.
+    /// The case is then expected to fail (reported as a known failure); passing is an error,
+    /// so the mark cannot outlive the fix.
+    pub known_failure: Option<String>,
 }
 
 /// The sizes a case may define.
@@ -164,7 +168,7 @@ pub const SIZES: [&str; 2] = ["ci", "full"];
 struct CaseFile {
     #[serde(default)]
     expect: Vec<ExpectFile>,
-    study: Option<BTreeMap<String, toml::Table>>,
+    study: Option<toml::Table>,
     #[serde(default)]
     bodies: Vec<BodyName>,
 }
@@ -268,11 +272,26 @@ pub fn read_case(path: &Path, source: &str) -> Result<CaseSpec, InputError> {
         });
     }
     let mut sizes = BTreeMap::new();
-    for (size, table) in file.study.unwrap_or_default() {
-        if !SIZES.contains(&size.as_str()) {
-            return Err(e(format!("study.{size}"), format!("is not a size; allowed: {}", SIZES.join(", "))));
+    let mut known_failure = None;
+    for (key, value) in file.study.unwrap_or_default() {
+        match (key.as_str(), value) {
+            ("known_failure", toml::Value::String(why)) if !why.trim().is_empty() => known_failure = Some(why),
+            ("known_failure", _) => {
+                return Err(e(
+                    "study.known_failure".into(),
+                    "must be a non-empty text: the defect and where it is tracked".into(),
+                ));
+            }
+            (size, toml::Value::Table(t)) if SIZES.contains(&size) => {
+                sizes.insert(key.clone(), t.into_iter().collect());
+            }
+            _ => {
+                return Err(e(
+                    format!("study.{key}"),
+                    format!("is not a size table or known_failure; allowed: {}, known_failure", SIZES.join(", ")),
+                ));
+            }
         }
-        sizes.insert(size, table.into_iter().collect());
     }
-    Ok(CaseSpec { expect, sizes })
+    Ok(CaseSpec { expect, sizes, known_failure })
 }
