@@ -53,7 +53,11 @@ pub fn drop_sphere(steps: usize) -> Result<Vec<[f64; 3]>, Box<dyn std::error::Er
     let material64 = sand().build::<f64>()?;
     // The soil: a 8 cm bed of sand in a 0.2 × 0.2 × 0.2 m container.
     let container = Aabb { min: [0.0; 3], max: [0.2, 0.2, 0.2] };
-    let bed = RegionSpec { region: SoilRegion::Bed { container, surface: Surface::Flat(0.08) }, material: 0 };
+    let bed = RegionSpec {
+        region: SoilRegion::Bed { container, surface: Surface::Flat(0.08) },
+        material: 0,
+        velocity: [0.0; 3],
+    };
     let terrain = build_terrain(&container, config.spacing, config.bce_layers, config.gravity, &[bed], &[material64])?;
     // The rapier world: the container's floor and walls, then the sphere.
     let mut world = PhysicsWorld { gravity: Vector::new(0.0, 0.0, -9.81), ..Default::default() };

@@ -187,13 +187,19 @@ impl<T: Real> Simulation<T> {
                 message: "wheel speeds must be finite and max_torque > 0".into(),
             });
         }
+        let invalid = |message| BuildError::InvalidDrive { vehicle: vehicle.to_string(), message };
         let v = &mut self.scene.vehicles[vi];
         v.max_torque = max_torque;
         v.drive = v
             .wheels
             .iter()
-            .map(|w| (w.joint, crate::scene::Profile(vec![(0.0, if w.side > 0.0 { left } else { right })])))
-            .collect();
+            .map(|w| {
+                Ok((
+                    w.joint,
+                    crate::scene::Profile::constant(if w.side > 0.0 { left } else { right }).map_err(invalid)?,
+                ))
+            })
+            .collect::<Result<_, BuildError>>()?;
         for w in &self.scene.vehicles[vi].wheels {
             if let Some(j) = self.vehicle_joints[vi][w.joint] {
                 self.system.rigid.set_motor_max_effort(j, max_torque);

@@ -132,12 +132,47 @@ fn overlapping_soil_regions_are_refused() {
     let text = format!(
         "{BOX}\n[terrain]\nmaterial = \"sand\"\ndepth = 0.05\n\n[[soil_blocks]]\nmaterial = \"sand\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.04]\nmax = [0.1, 0.1, 0.1]\n"
     );
-    let e = rejected("overlap", &text);
-    assert!(e.starts_with("FILE:"), "{e}");
-    assert!(e.contains("key `soil_blocks[0].shape`: overlaps terrain"), "{e}");
-    // Touching is not overlapping.
+    // The lattice decides: the block and the bed both hold the points at z = 0.05.
+    let scene = common::scene(&text);
+    let e = Simulation::<f32>::new(&scene).err().expect("refused").to_string();
+    assert_eq!(e.lines().count(), 1, "{e}");
+    assert!(e.contains("soil_blocks[0] overlaps terrain (both hold the lattice point at ["), "{e}");
+    assert!(e.contains("0.0500] m); soil regions must not overlap"), "{e}");
+    // Touching is not overlapping; and a block beside a heightmap's low part is fine although
+    // bounding boxes would overlap, so the check is on lattice points, not boxes.
     let ok = text.replace("min = [0.0, 0.0, 0.04]", "min = [0.0, 0.0, 0.05]");
-    common::scene(&ok);
+    Simulation::<f32>::new(&common::scene(&ok)).expect("touching regions build");
+}
+
+#[test]
+fn initial_velocities_start_the_soil_and_the_bodies_moving() {
+    // A moving block beside a resting bed: the soil's momentum at t = 0 is exactly the block's
+    // mass times its velocity.
+    let text = format!(
+        "{BOX}\n[terrain]\nmaterial = \"sand\"\ndepth = 0.05\n\n[[soil_blocks]]\nmaterial = \"sand\"\nshape = \"box\"\nmin = [0.05, 0.05, 0.05]\nmax = [0.1, 0.1, 0.1]\nvelocity = [2.0, -1.0, 0.5]\n\n\
+         [[bodies]]\nname = \"ball\"\nshape = {{ type = \"sphere\", radius = 0.01 }}\nmass = 0.1\nposition = [0.15, 0.15, 0.15]\nfsi = false\nmotion = {{ type = \"free\", velocity = [0.2, 0.0, 1.0] }}\n"
+    );
+    let scene = common::scene(&text);
+    let mut sim = Simulation::<f64>::new(&scene).expect("builds");
+    let f = &sim.system.fluid;
+    let block_mass = 1600.0 * 0.05f64.powi(3);
+    let moving: f64 = (0..f.len()).filter(|i| f.velocities()[*i].as_f64() != [0.0; 3]).map(|i| f.masses()[i]).sum();
+    assert!((moving - block_mass).abs() < 1e-12, "{moving} kg moving, block {block_mass} kg");
+    let p = f.momentum();
+    for (k, v) in [2.0, -1.0, 0.5].iter().enumerate() {
+        assert!((p[k] - block_mass * v).abs() < 1e-12, "axis {k}: {} vs {}", p[k], block_mass * v);
+    }
+    // The free ball (no markers) flies ballistically: x0 + v t + g t²/2, to rapier's
+    // semi-implicit Euler error (g t dt / 2 in height) and its f32 round-off (1e-5 m here).
+    let ball = sim.body("ball").expect("ball");
+    while sim.time() < 0.05 - 1e-12 {
+        sim.step().expect("step");
+    }
+    let t = sim.time();
+    let c = sim.body_state(ball).com;
+    assert!((c[0] - (0.15 + 0.2 * t)).abs() < 1e-5, "x {}", c[0]);
+    let z = 0.15 + t - 0.5 * 9.81 * t * t;
+    assert!((c[2] - z).abs() <= 0.5 * 9.81 * t * scene.exchange_interval + 1e-5, "z {} vs {z}", c[2]);
 }
 
 #[test]

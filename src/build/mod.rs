@@ -18,7 +18,7 @@ use regolith_coupling::{CouplingError, FsiBodyId, FsiSystem, SoilInit, grow_doma
 use regolith_fsi::rheology::{Material, ParamError};
 use regolith_fsi::{Real, SolverError, SphSolver};
 use regolith_rigid::{BodyId, JointId, Motion, RigidError, RigidWorld};
-use regolith_terrain::{RegionSpec, SoilRegion, TerrainBuild, TerrainError, build_terrain};
+use regolith_terrain::{RegionSpec, TerrainBuild, TerrainError, build_terrain};
 
 use crate::input::InputError;
 use crate::scene::{Backend, Scene};
@@ -66,6 +66,21 @@ pub enum BuildError {
     /// Every soil particle started inside a body.
     #[error("the bodies fill all the soil")]
     NoSoilLeft,
+    /// Two soil regions hold the same lattice point.
+    #[error(
+        "{second} overlaps {first} (both hold the lattice point at [{:.4}, {:.4}, {:.4}] m); soil regions must not overlap: move the block or lower the terrain",
+        at[0],
+        at[1],
+        at[2]
+    )]
+    SoilOverlap {
+        /// The earlier region's key (`terrain`, `soil_blocks[0]`).
+        first: String,
+        /// The later one's.
+        second: String,
+        /// A point both hold (m).
+        at: [f64; 3],
+    },
     /// A vehicle to be lowered onto the soil is not over it.
     #[error("{key}: vehicle \"{name}\" is not over the soil: place it over the terrain or give position = [x, y, z]")]
     VehicleOffSoil {
@@ -123,8 +138,11 @@ pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, Terrai
     let mats64: Vec<Material<f64>> = scene.materials.iter().map(|m| m.params.build()).collect::<Result<_, _>>()?;
     let mats: Vec<Material<T>> = scene.materials.iter().map(|m| m.params.build()).collect::<Result<_, _>>()?;
     let container = scene.container.ok_or(BuildError::NoContainer)?;
-    let regions: Vec<RegionSpec> =
-        scene.soil.iter().map(|s| RegionSpec { region: s.region.clone(), material: s.material as u16 }).collect();
+    let regions: Vec<RegionSpec> = scene
+        .soil
+        .iter()
+        .map(|s| RegionSpec { region: s.region.clone(), material: s.material as u16, velocity: s.velocity })
+        .collect();
     let terrain = build_terrain(
         &container,
         scene.solver.spacing,
@@ -132,23 +150,13 @@ pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, Terrai
         scene.solver.gravity,
         &regions,
         &mats64,
-    )?;
-    let mut terrain = terrain;
-    for s in scene.soil.iter().filter(|s| s.velocity != [0.0; 3]) {
-        let (lo, hi) = crate::scene::region_bounds(&s.region);
-        for p in terrain.particles.iter_mut() {
-            let inside = match &s.region {
-                SoilRegion::Cylinder { base_center: c, radius, .. } => {
-                    (p.pos[0] - c[0]).powi(2) + (p.pos[1] - c[1]).powi(2) <= radius * radius
-                        && (lo[2]..=hi[2]).contains(&p.pos[2])
-                }
-                _ => (0..3).all(|a| (lo[a]..=hi[a]).contains(&p.pos[a])),
-            };
-            if inside {
-                p.vel = s.velocity;
-            }
+    )
+    .map_err(|e| match e {
+        TerrainError::Overlap { first, second, at } => {
+            BuildError::SoilOverlap { first: scene.soil[first].key.clone(), second: scene.soil[second].key.clone(), at }
         }
-    }
+        e => e.into(),
+    })?;
     Ok((mats, terrain))
 }
 

@@ -45,7 +45,9 @@ impl SurfaceGrid {
         let idx = |v: f64, o: f64, n: usize| ((v - o) / self.cell).floor().clamp(0.0, (n - 1) as f64) as usize;
         let (i0, i1) = (idx(x - r, self.origin[0], self.nx), idx(x + r, self.origin[0], self.nx));
         let (j0, j1) = (idx(y - r, self.origin[1], self.ny), idx(y + r, self.origin[1], self.ny));
-        if x + r < self.origin[0] || y + r < self.origin[1] {
+        // Off the grid on any side is off the soil (not the edge column, clamped).
+        let far = [self.origin[0] + self.nx as f64 * self.cell, self.origin[1] + self.ny as f64 * self.cell];
+        if x + r < self.origin[0] || y + r < self.origin[1] || x - r > far[0] || y - r > far[1] {
             return None;
         }
         let mut best = f64::NEG_INFINITY;
@@ -55,5 +57,24 @@ impl SurfaceGrid {
             }
         }
         best.is_finite().then_some(best)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn off_the_grid_on_any_side_is_off_the_soil() {
+        // A 4 x 4 patch of columns at 0.1 m spacing, x and y in [0.05, 0.35], top at z = 0.25.
+        let pts: Vec<[f64; 3]> =
+            (0..4).flat_map(|i| (0..4).map(move |j| [0.05 + 0.1 * i as f64, 0.05 + 0.1 * j as f64, 0.2])).collect();
+        let g = SurfaceGrid::new(pts.iter().copied(), 0.1);
+        assert_eq!(g.height(0.2, 0.2, 0.0), Some(0.25));
+        for (x, y) in [(-0.5, 0.2), (0.2, -0.5), (0.9, 0.2), (0.2, 0.9)] {
+            assert_eq!(g.height(x, y, 0.05), None, "({x}, {y})");
+        }
+        // Within r of the edge still sees the edge column.
+        assert_eq!(g.height(0.45, 0.2, 0.1), Some(0.25));
     }
 }

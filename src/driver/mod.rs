@@ -28,7 +28,7 @@ pub enum RunError {
     #[error("solver")]
     Solver(#[from] SolverError),
     /// The solver stopped at a particle: `report` names it, its material, position, stress,
-    /// p_c and the step (what `run::run_scene` returns for a [`Self::Solver`] error).
+    /// p_c and the step (what [`Driver::step`] returns when the solver fails).
     #[error("{report}")]
     Failed {
         /// One line about the particle (the solver's error included).
@@ -60,6 +60,25 @@ pub enum RunError {
 }
 
 impl RunError {
+    /// Whether the run ends with its outputs written up to this point (a solver failure, a
+    /// runaway, a stop request) rather than at once (a build or output error).
+    pub fn keeps_outputs(&self) -> bool {
+        matches!(self, Self::Solver(_) | Self::Failed { .. } | Self::Runaway { .. } | Self::Interrupted { .. })
+    }
+
+    /// The solver's error `cause` with a one-line report on the particle it names.
+    fn failed<T: Real>(sim: &Simulation<T>, cause: SolverError) -> Self {
+        let particle = match &cause {
+            SolverError::NonFinite { particle, .. } | SolverError::Rheology { particle, .. } => Some(*particle),
+            SolverError::Setup(_) => None,
+        };
+        let report = match particle {
+            Some(id) => format!("solver failed: {cause}; {}", sim.particle_report(id)),
+            None => format!("solver failed: {cause}"),
+        };
+        Self::Failed { report, cause }
+    }
+
     /// An output error for `path`.
     pub fn output(path: &Path, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
         Self::Output { path: path.to_path_buf(), source: source.into() }
@@ -195,7 +214,7 @@ impl<'o, T: Real> Driver<'o, T> {
             return Err(RunError::Interrupted { time: sim.time() });
         }
         let remaining = self.stats.end_time - sim.time();
-        let r = sim.step_max(Some(remaining))?;
+        let r = sim.step_max(Some(remaining)).map_err(|e| RunError::failed(sim, e))?;
         if r.max_speed > sim.scene.runaway_speed {
             let fluid = &sim.system.fluid;
             let n = fluid.active();

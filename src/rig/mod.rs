@@ -79,12 +79,9 @@ pub struct RigOutput<T: Real> {
 }
 
 /// Splits an error of [`Driver::step`] into one that ends the rig with its outputs kept
-/// (a solver failure, a stop request: `Ok`) and one that ends it at once (`Err`).
+/// ([`RunError::keeps_outputs`]: `Ok`) and one that ends it at once (`Err`).
 fn halt(e: RunError) -> Result<RunError, RunError> {
-    match e {
-        RunError::Solver(_) | RunError::Runaway { .. } | RunError::Interrupted { .. } => Ok(e),
-        e => Err(e),
-    }
+    if e.keeps_outputs() { Ok(e) } else { Err(e) }
 }
 
 /// Runs a rig with the run loop `driver` (which carries the observers).

@@ -98,12 +98,12 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
     // A solver error, a runaway or a stop ends the run with its outputs written; other errors
     // end it at once.
     let mut stopped = |e: RunError| match e {
-        RunError::Solver(_) | RunError::Runaway { .. } => {
-            failure = Some(e);
-            Ok(())
-        }
         RunError::Interrupted { time } => {
             interrupted = Some(time);
+            Ok(())
+        }
+        e if e.keeps_outputs() => {
+            failure = Some(e);
             Ok(())
         }
         e => Err(e),
@@ -145,22 +145,6 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
     let stats = driver.stats.clone();
     drop(driver);
     let Ran { sim, series, rig, bekker, mut figures, initial } = ran;
-    // Name the particle a solver failure stopped at.
-    let failure = failure.map(|e| match (e, &sim) {
-        (RunError::Solver(source), Some(s)) => {
-            let particle = match &source {
-                regolith_fsi::SolverError::NonFinite { particle, .. }
-                | regolith_fsi::SolverError::Rheology { particle, .. } => Some(*particle),
-                regolith_fsi::SolverError::Setup(_) => None,
-            };
-            let report = match particle {
-                Some(id) => format!("solver failed: {source}; {}", s.particle_report(id)),
-                None => format!("solver failed: {source}"),
-            };
-            RunError::Failed { report, cause: source }
-        }
-        (e, _) => e,
-    });
     let series = series.or_else(|| initial.is_some().then_some(terrain_series.0));
     let mut outputs = Vec::new();
     #[cfg(feature = "mcap")]

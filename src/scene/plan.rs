@@ -62,8 +62,11 @@ pub fn describe(scene: &Scene) -> String {
     // the CPU backend's monomorphised loops).
     #[cfg(feature = "wgpu")]
     let mut effects = {
-        let mats32: Vec<_> = scene.materials.iter().filter_map(|m| m.params.build::<f32>().ok()).collect();
-        regolith_wgpu::Effects::resolve(sv, &mats32).names()
+        // Every material of a validated scene builds; one that would not is named, not dropped.
+        match scene.materials.iter().map(|m| m.params.build::<f32>()).collect::<Result<Vec<_>, _>>() {
+            Ok(mats32) => regolith_wgpu::Effects::resolve(sv, &mats32).names(),
+            Err(_) => vec!["(a material does not build in f32: effects unknown)"],
+        }
     };
     // Without the wgpu backend only the choices below are listed.
     #[cfg(not(feature = "wgpu"))]

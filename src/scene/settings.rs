@@ -199,10 +199,14 @@ pub(super) fn check_fixed_step(
         }
         return Ok(());
     };
-    let stiffest = materials
-        .iter()
-        .filter_map(|m| m.params.build::<f64>().ok().map(|b| (m.name.as_str(), b.wave_speed())))
-        .max_by(|a, b| a.1.total_cmp(&b.1));
+    let mut stiffest: Option<(&str, f64)> = None;
+    for (i, m) in materials.iter().enumerate() {
+        let built = m.params.build::<f64>().map_err(|err| e(&format!("materials[{i}]"), err.to_string()))?;
+        let c = built.wave_speed();
+        if stiffest.is_none_or(|(_, best)| c > best) {
+            stiffest = Some((m.name.as_str(), c));
+        }
+    }
     let Some((name, c)) = stiffest else {
         return Ok(());
     };

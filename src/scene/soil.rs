@@ -207,20 +207,6 @@ pub(super) fn resolve_soil(
         if velocity.iter().any(|v| !v.is_finite()) {
             return Err(e(&k("velocity"), "must be finite [vx, vy, vz] in m/s".into()));
         }
-        // Regions may not overlap: which one a particle would belong to would be a silent choice.
-        let (lo, hi) = region_bounds(&region);
-        for other in &soil {
-            let (a, b) = region_bounds(&other.region);
-            if (0..3).all(|ax| lo[ax].max(a[ax]) < hi[ax].min(b[ax]) - 1e-9 * spacing) {
-                return Err(e(
-                    &k("shape"),
-                    format!(
-                        "overlaps {} (bounds [{a:?} .. {b:?}]); soil regions must not overlap: move the block or lower the terrain",
-                        other.key
-                    ),
-                ));
-            }
-        }
         soil.push(SoilSpec { material, region, key: format!("soil_blocks[{i}]"), velocity });
     }
     if soil.is_empty() {

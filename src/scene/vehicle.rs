@@ -72,9 +72,28 @@ pub(crate) enum ProfileFile {
 
 /// A value over time: piecewise linear through `(t, value)` points, held outside them.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Profile(pub Vec<(f64, f64)>);
+pub struct Profile(Vec<(f64, f64)>);
 
 impl Profile {
+    /// A profile through `points` (time s, value): at least one, finite, times increasing.
+    pub fn new(points: Vec<(f64, f64)>) -> Result<Self, String> {
+        let finite = points.iter().all(|(t, v)| t.is_finite() && v.is_finite());
+        if points.is_empty() || !finite || points.windows(2).any(|w| w[1].0 <= w[0].0) {
+            return Err("must be a number or a list of [time s, value] pairs with increasing times".into());
+        }
+        Ok(Self(points))
+    }
+
+    /// The same value at all times.
+    pub fn constant(value: f64) -> Result<Self, String> {
+        Self::new(vec![(0.0, value)])
+    }
+
+    /// Its (time s, value) points.
+    pub fn points(&self) -> &[(f64, f64)] {
+        &self.0
+    }
+
     /// The value at time `t`.
     pub fn at(&self, t: f64) -> f64 {
         let p = &self.0;
@@ -138,14 +157,9 @@ impl VehicleSpec {
 
 fn profile(v: &ProfileFile, scale: f64) -> Result<Profile, String> {
     match v {
-        ProfileFile::Constant(c) if c.is_finite() => Ok(Profile(vec![(0.0, c * scale)])),
+        ProfileFile::Constant(c) if c.is_finite() => Profile::constant(c * scale),
         ProfileFile::Constant(c) => Err(format!("must be finite (got {c})")),
-        ProfileFile::Points(p) => {
-            if p.is_empty() || p.iter().flatten().any(|x| !x.is_finite()) || p.windows(2).any(|w| w[1][0] <= w[0][0]) {
-                return Err("must be a number or a list of [time s, value] pairs with increasing times".into());
-            }
-            Ok(Profile(p.iter().map(|[t, v]| (*t, v * scale)).collect()))
-        }
+        ProfileFile::Points(p) => Profile::new(p.iter().map(|[t, v]| (*t, v * scale)).collect()),
     }
 }
 

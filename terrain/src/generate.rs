@@ -18,13 +18,15 @@ use regolith_fsi::{MarkerInit, ParticleInit};
 
 use crate::{Aabb, SoilRegion, TerrainError};
 
-/// A region and the index of its material.
+/// A region, the index of its material and the velocity its particles start with.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RegionSpec {
     /// Where.
     pub region: SoilRegion,
     /// Material index.
     pub material: u16,
+    /// Initial velocity of its particles (m/s).
+    pub velocity: [f64; 3],
 }
 
 /// Everything the solver is built from.
@@ -98,14 +100,18 @@ pub fn build_terrain(
     }
     let [nx, ny, nz] = lat.n;
     let d0 = spacing;
-    // Occupied interior lattice points, first region wins.
-    let mut cells: HashMap<[i64; 3], u16> = HashMap::new();
-    let mut insert = |c: [i64; 3], m: u16| {
+    // Occupied interior lattice points and the region holding each; regions may not overlap.
+    let mut cells: HashMap<[i64; 3], usize> = HashMap::new();
+    let mut overlap = None;
+    let mut insert = |c: [i64; 3], r: usize| {
         if c[0] >= 1 && c[0] < nx && c[1] >= 1 && c[1] < ny && c[2] >= 1 && c[2] < nz {
-            cells.entry(c).or_insert(m);
+            let held = *cells.entry(c).or_insert(r);
+            if held != r && overlap.is_none() {
+                overlap = Some((held, r, c));
+            }
         }
     };
-    for spec in regions {
+    for (r, spec) in regions.iter().enumerate() {
         if spec.material as usize >= materials.len() {
             return Err(TerrainError::Setup(format!("material index {} out of range", spec.material)));
         }
@@ -119,7 +125,7 @@ pub fn build_terrain(
                             surface.depth_at((p[0] - snapped.min[0]) / size[0], (p[1] - snapped.min[1]) / size[1]);
                         let top = (depth / d0).round() as i64;
                         for k in 1..=top {
-                            insert([i, j, k], spec.material);
+                            insert([i, j, k], r);
                         }
                     }
                 }
@@ -131,7 +137,7 @@ pub fn build_terrain(
                 for i in i0..=i1 {
                     for j in j0..=j1 {
                         for k in k0..=k1 {
-                            insert([i, j, k], spec.material);
+                            insert([i, j, k], r);
                         }
                     }
                 }
@@ -145,7 +151,7 @@ pub fn build_terrain(
                         let p = lat.point([i, j, 0]);
                         if (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) <= radius * radius * (1.0 + 1e-12) {
                             for k in k0..=k1 {
-                                insert([i, j, k], spec.material);
+                                insert([i, j, k], r);
                             }
                         }
                     }
@@ -153,22 +159,26 @@ pub fn build_terrain(
             }
         }
     }
+    if let Some((first, second, c)) = overlap {
+        return Err(TerrainError::Overlap { first, second, at: lat.point(c) });
+    }
     if cells.is_empty() {
         return Err(TerrainError::Setup(
             "the soil regions contain no lattice point: make them larger than the spacing".into(),
         ));
     }
     // Geostatic stress, column by column from the top.
-    let mut columns: BTreeMap<(i64, i64), Vec<(i64, u16)>> = BTreeMap::new();
-    for (c, m) in &cells {
-        columns.entry((c[0], c[1])).or_default().push((c[2], *m));
+    let mut columns: BTreeMap<(i64, i64), Vec<(i64, usize)>> = BTreeMap::new();
+    for (c, r) in &cells {
+        columns.entry((c[0], c[1])).or_default().push((c[2], *r));
     }
     let g = gravity[2].abs();
     let mut particles = Vec::with_capacity(cells.len());
     for ((i, j), mut col) in columns {
         col.sort_unstable_by_key(|c| std::cmp::Reverse(c.0));
         let mut above = 0.0; // weight per area of the soil above the current particle (Pa)
-        for (k, m) in col {
+        for (k, r) in col {
+            let m = regions[r].material;
             let mat = &materials[m as usize];
             let half = mat.density * g * 0.5 * d0;
             let sv = -(above + half);
@@ -178,7 +188,7 @@ pub fn build_terrain(
             let st = mat.initial_state(p0);
             particles.push(ParticleInit {
                 pos: lat.point([i, j, k]),
-                vel: [0.0; 3],
+                vel: regions[r].velocity,
                 rho: mat.density,
                 mass: mat.density * d0 * d0 * d0,
                 sigma: [sh, sh, sv, 0.0, 0.0, 0.0],
@@ -230,8 +240,11 @@ mod tests {
     #[test]
     fn bed_has_the_right_count_and_geostatic_stress() {
         let c = Aabb { min: [0.0; 3], max: [0.2, 0.1, 0.2] };
-        let regions =
-            [RegionSpec { region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) }, material: 0 }];
+        let regions = [RegionSpec {
+            region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) },
+            material: 0,
+            velocity: [0.0; 3],
+        }];
         let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &regions, &[dp()]).expect("builds");
         // 19 × 9 interior columns, 10 layers.
         assert_eq!(b.particles.len(), 19 * 9 * 10);
@@ -250,12 +263,41 @@ mod tests {
         let regions = [RegionSpec {
             region: SoilRegion::Cylinder { base_center: [0.3, 0.3, 0.0], radius: 0.1, height: 0.1 },
             material: 0,
+            velocity: [0.0; 3],
         }];
         let b = build_terrain(&c, 0.005, 3, [0.0, 0.0, -9.81], &regions, &[dp()]).expect("builds");
         let expect = std::f64::consts::PI * 0.01 * 0.1 / 0.005f64.powi(3);
         assert!((b.particles.len() as f64 - expect).abs() / expect < 0.01, "{} vs {expect}", b.particles.len());
         let top = b.particles.iter().map(|p| p.pos[2]).fold(0.0, f64::max);
         assert!((top - 0.1).abs() < 1e-9);
+    }
+
+    #[test]
+    fn overlapping_regions_are_refused_and_touching_ones_are_not() {
+        let c = Aabb { min: [0.0; 3], max: [0.1, 0.1, 0.3] };
+        let bed = RegionSpec {
+            region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) },
+            material: 0,
+            velocity: [0.0; 3],
+        };
+        let block = |z0: f64| RegionSpec {
+            region: SoilRegion::Block(Aabb { min: [0.0, 0.0, z0], max: [0.05, 0.05, 0.2] }),
+            material: 0,
+            velocity: [2.0, 0.0, -1.0],
+        };
+        let err =
+            build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &[bed.clone(), block(0.09)], &[dp()]).expect_err("overlap");
+        assert!(
+            matches!(err, TerrainError::Overlap { first: 0, second: 1, at } if (at[2] - 0.1).abs() < 1e-9),
+            "{err}"
+        );
+        // Touching at z = 0.1: the block's particles carry its velocity, the bed's are at rest.
+        let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &[bed, block(0.1)], &[dp()]).expect("builds");
+        let moving = b.particles.iter().filter(|p| p.vel == [2.0, 0.0, -1.0]).count();
+        let resting = b.particles.iter().filter(|p| p.vel == [0.0; 3]).count();
+        assert_eq!(moving, 5 * 5 * 10, "block 5 x 5 x 10 cm: points with lo < x ≤ hi");
+        assert_eq!(resting, 9 * 9 * 10, "bed");
+        assert!(b.particles.iter().filter(|p| p.vel != [0.0; 3]).all(|p| p.pos[2] > 0.1 + 1e-9));
     }
 
     #[test]
@@ -266,8 +308,16 @@ mod tests {
         let c = Aabb { min: [0.0; 3], max: [0.1, 0.1, 0.3] };
         // Heavy bed 0.1 m deep, light block 0.1 m on top of it.
         let regions = [
-            RegionSpec { region: SoilRegion::Block(Aabb { min: [0.0, 0.0, 0.1], max: [0.1, 0.1, 0.2] }), material: 1 },
-            RegionSpec { region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) }, material: 0 },
+            RegionSpec {
+                region: SoilRegion::Block(Aabb { min: [0.0, 0.0, 0.1], max: [0.1, 0.1, 0.2] }),
+                material: 1,
+                velocity: [0.0; 3],
+            },
+            RegionSpec {
+                region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) },
+                material: 0,
+                velocity: [0.0; 3],
+            },
         ];
         let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &regions, &[heavy, light]).expect("builds");
         let at = |z: f64| {
@@ -292,8 +342,11 @@ mod tests {
     #[test]
     fn container_is_snapped_to_whole_spacings_with_a_note() {
         let c = Aabb { min: [0.0; 3], max: [0.205, 0.1, 0.1] };
-        let regions =
-            [RegionSpec { region: SoilRegion::Block(Aabb { min: [0.0; 3], max: [0.1, 0.1, 0.05] }), material: 0 }];
+        let regions = [RegionSpec {
+            region: SoilRegion::Block(Aabb { min: [0.0; 3], max: [0.1, 0.1, 0.05] }),
+            material: 0,
+            velocity: [0.0; 3],
+        }];
         let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &regions, &[dp()]).expect("builds");
         assert_eq!(b.notes.len(), 1);
         assert!((b.container.max[0] - 0.2).abs() < 1e-12 || (b.container.max[0] - 0.21).abs() < 1e-12);

@@ -32,4 +32,15 @@ pub enum TerrainError {
     /// The regions or materials are inconsistent.
     #[error("{0}")]
     Setup(String),
+    /// Two regions claim the same lattice point: which one the particle would belong to
+    /// would be a silent choice.
+    #[error("soil regions {first} and {second} overlap (both hold the lattice point at {at:?} m)")]
+    Overlap {
+        /// The earlier region (index into the regions).
+        first: usize,
+        /// The later one.
+        second: usize,
+        /// A point both hold (m).
+        at: [f64; 3],
+    },
 }
