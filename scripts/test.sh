@@ -37,9 +37,10 @@ RUSTDOCFLAGS="-D warnings -D missing_docs" cargo doc --workspace --no-deps
 cargo test --release --workspace --all-targets
 cargo test --release --workspace --doc
 # The stability suite at CI size: the hard cases of examples/hard/ within their [[expect]]
-# bounds. The cases not yet verified at CI size on this machine class (NOTES.md, issue 15) run
-# with `regolith study stability` but not here yet.
+# bounds. thin_grousers and wheel_full_slip pass at CI size too but take about 2 minutes each
+# on 2 cores; they run with `regolith study stability` (docs/stability.md), not here, until the
+# solver is faster (issue 13).
 CI_CASES=body_leaves_container,cone_fast,cut_above,cut_below,deep_bed_f32,fixed_step_forced,fixed_step_refused
 CI_CASES=$CI_CASES,heavy_plate,jet_at_wall,mcc_ocr5000,mcc_small_lambda_kappa,soil_soft,soil_stiff
-CI_CASES=$CI_CASES,sphere_impact,stiffness_contrast
+CI_CASES=$CI_CASES,sphere_impact,stiffness_contrast,wheel_drop,geostatic_20s,rover_slope_30
 cargo run --release --bin regolith -- study stability --size ci --cases "$CI_CASES" --out target/stability-ci

@@ -141,6 +141,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         }
         vehicles.push(vehicle::resolve_vehicle(path, i, v, bce_layers, &mut bodies, &e)?);
     }
+    check_lattice_size(&container, &bodies, spacing, &e)?;
     let rig = match &file.rig {
         None => None,
         Some(r) => Some(resolve_rig(path, source, r, &bodies, &file.bodies)?),
@@ -163,6 +164,40 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         output,
         vehicles,
     })
+}
+
+/// Most lattice points a container (or an FSI body's bounding cube) may span at its spacing:
+/// particle and marker indices are 32-bit, and a billion particles need hundreds of GB.
+pub const MAX_LATTICE_POINTS: f64 = 1e9;
+
+/// Refuses a spacing so fine that the container or a body would span more than
+/// [`MAX_LATTICE_POINTS`] lattice points (it would exhaust memory before the first step).
+fn check_lattice_size(
+    container: &Option<Aabb>,
+    bodies: &[BodySpec],
+    spacing: f64,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<(), InputError> {
+    let d3 = spacing.powi(3);
+    let too_many = |what: String, volume: f64| {
+        let n = volume / d3;
+        if n > MAX_LATTICE_POINTS || !n.is_finite() {
+            return Err(e(
+                "sph.spacing",
+                format!(
+                    "{spacing:e} m is too fine: {what} would span {n:.3e} lattice points (at most {MAX_LATTICE_POINTS:e})"
+                ),
+            ));
+        }
+        Ok(())
+    };
+    if let Some(c) = container {
+        too_many("the container".into(), (0..3).map(|a| c.max[a] - c.min[a]).product())?;
+    }
+    for b in bodies.iter().filter(|b| b.fsi) {
+        too_many(format!("body \"{}\"", b.desc.name), (2.0 * b.desc.shape.bounding_radius()).powi(3))?;
+    }
+    Ok(())
 }
 
 /// Bounding box of a soil region (m).

@@ -219,31 +219,57 @@ impl UrdfModel {
                     [i.ixx, i.iyy, i.izz]
                 )));
             }
-            let geometry =
-                |what: &str, origin: &urdf_rs::Pose, g: &urdf_rs::Geometry| -> Result<(Pose, ShapeDesc), UrdfError> {
-                    let at = pose(origin);
-                    let shape = match g {
-                        urdf_rs::Geometry::Box { size } => ShapeDesc::Box { size: size.0 },
-                        urdf_rs::Geometry::Cylinder { radius, length } => {
-                            ShapeDesc::Cylinder { radius: *radius, length: *length, axis: Axis::Z }
-                        }
-                        urdf_rs::Geometry::Sphere { radius } => ShapeDesc::Sphere { radius: *radius },
-                        urdf_rs::Geometry::Capsule { radius, length } => ShapeDesc::Compound(vec![
-                            (Pose::default(), ShapeDesc::Cylinder { radius: *radius, length: *length, axis: Axis::Z }),
-                            (Pose::translation([0.0, 0.0, 0.5 * length]), ShapeDesc::Sphere { radius: *radius }),
-                            (Pose::translation([0.0, 0.0, -0.5 * length]), ShapeDesc::Sphere { radius: *radius }),
-                        ]),
-                        urdf_rs::Geometry::Mesh { filename, scale } => {
-                            let file = resolve_uri(filename, dir, packages)
-                                .map_err(|m| fail(format!("link `{}` ({what}): {m}", l.name)))?;
-                            let scale = scale.as_ref().map_or([1.0; 3], |s| s.0);
-                            let mesh = load_mesh(&file, scale)
-                                .map_err(|e| fail(format!("link `{}` ({what}): {e}", l.name)))?;
-                            ShapeDesc::Mesh { vertices: mesh.vertices, indices: mesh.indices }
-                        }
-                    };
-                    Ok((at, shape))
+            let geometry = |what: &str,
+                            origin: &urdf_rs::Pose,
+                            g: &urdf_rs::Geometry|
+             -> Result<(Pose, ShapeDesc), UrdfError> {
+                // Sizes and mesh scales finite and positive (non-zero for a scale), origins
+                // finite: a NaN radius would otherwise reach the marker generator.
+                let (sizes, scale): (Vec<f64>, Vec<f64>) = match g {
+                    urdf_rs::Geometry::Box { size } => (size.0.to_vec(), Vec::new()),
+                    urdf_rs::Geometry::Cylinder { radius, length } | urdf_rs::Geometry::Capsule { radius, length } => {
+                        (vec![*radius, *length], Vec::new())
+                    }
+                    urdf_rs::Geometry::Sphere { radius } => (vec![*radius], Vec::new()),
+                    urdf_rs::Geometry::Mesh { scale, .. } => {
+                        (Vec::new(), scale.as_ref().map_or_else(Vec::new, |s| s.0.to_vec()))
+                    }
                 };
+                if sizes.iter().any(|d| !(d.is_finite() && *d > 0.0))
+                    || scale.iter().any(|d| !(d.is_finite() && *d != 0.0))
+                {
+                    return Err(fail(format!(
+                        "link `{}` ({what}): geometry sizes must be finite and > 0 m, mesh scales finite and non-zero (got {:?})",
+                        l.name,
+                        if sizes.is_empty() { scale } else { sizes }
+                    )));
+                }
+                if origin.xyz.0.iter().chain(&origin.rpy.0).any(|v| !v.is_finite()) {
+                    return Err(fail(format!("link `{}` ({what}): <origin> xyz and rpy must be finite", l.name)));
+                }
+                let at = pose(origin);
+                let shape = match g {
+                    urdf_rs::Geometry::Box { size } => ShapeDesc::Box { size: size.0 },
+                    urdf_rs::Geometry::Cylinder { radius, length } => {
+                        ShapeDesc::Cylinder { radius: *radius, length: *length, axis: Axis::Z }
+                    }
+                    urdf_rs::Geometry::Sphere { radius } => ShapeDesc::Sphere { radius: *radius },
+                    urdf_rs::Geometry::Capsule { radius, length } => ShapeDesc::Compound(vec![
+                        (Pose::default(), ShapeDesc::Cylinder { radius: *radius, length: *length, axis: Axis::Z }),
+                        (Pose::translation([0.0, 0.0, 0.5 * length]), ShapeDesc::Sphere { radius: *radius }),
+                        (Pose::translation([0.0, 0.0, -0.5 * length]), ShapeDesc::Sphere { radius: *radius }),
+                    ]),
+                    urdf_rs::Geometry::Mesh { filename, scale } => {
+                        let file = resolve_uri(filename, dir, packages)
+                            .map_err(|m| fail(format!("link `{}` ({what}): {m}", l.name)))?;
+                        let scale = scale.as_ref().map_or([1.0; 3], |s| s.0);
+                        let mesh =
+                            load_mesh(&file, scale).map_err(|e| fail(format!("link `{}` ({what}): {e}", l.name)))?;
+                        ShapeDesc::Mesh { vertices: mesh.vertices, indices: mesh.indices }
+                    }
+                };
+                Ok((at, shape))
+            };
             let collision =
                 l.collision.iter().map(|c| geometry("collision", &c.origin, &c.geometry)).collect::<Result<_, _>>()?;
             let visual =
