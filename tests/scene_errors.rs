@@ -344,7 +344,19 @@ fn body_and_rig_scene_is_valid() {
 
 #[test]
 fn body_and_rig_errors() {
-    let cases: [(&str, &str, &str, &str); 8] = [
+    let cases: [(&str, &str, &str, &str); 10] = [
+        (
+            "mass = 2.0",
+            "mass = 2.0\nactive_margin = -0.05",
+            "{}:28: key `bodies[0].active_margin`: must be >= 0 m (got -0.05)",
+            "active_margin_negative",
+        ),
+        (
+            "mass = 2.0",
+            "mass = 2.0\nfsi = false\nactive_margin = 0.05",
+            "{}:29: key `bodies[0].active_margin`: is set but fsi = false (only FSI bodies have active boxes)",
+            "active_margin_without_fsi",
+        ),
         (
             "shape = { type = \"wheel\", radius = 0.1, width = 0.05 }\n",
             "",
@@ -427,3 +439,52 @@ fn mesh_bodies_need_a_readable_watertight_file() {
         "{e}"
     );
 }
+
+case!(
+    active_key_without_enabled,
+    "spacing = 0.02\n",
+    "spacing = 0.02\n\n[sph.active]\ntravel = 0.05\n",
+    "{}:9: key `sph.active.travel`: is set but enabled is not true"
+);
+case!(
+    active_travel_zero,
+    "spacing = 0.02\n",
+    "spacing = 0.02\n\n[sph.active]\nenabled = true\ntravel = 0.0\n",
+    "{}:10: key `sph.active.travel`: must be > 0 m (got 0)"
+);
+case!(
+    active_sleep_speed_negative,
+    "spacing = 0.02\n",
+    "spacing = 0.02\n\n[sph.active]\nenabled = true\nsleep_speed = -1.0\n",
+    "{}:10: key `sph.active.sleep_speed`: must be >= 0 m/s (got -1)"
+);
+case!(
+    active_free_flow_negative,
+    "spacing = 0.02\n",
+    "spacing = 0.02\n\n[sph.active]\nenabled = true\nfree_flow_time = -0.5\n",
+    "{}:10: key `sph.active.free_flow_time`: must be >= 0 s (got -0.5)"
+);
+case!(
+    active_margin_negative,
+    "spacing = 0.02\n",
+    "spacing = 0.02\n\n[sph.active]\nenabled = true\nmargin = -0.1\n",
+    "{}:10: key `sph.active.margin`: must be >= 0 m (got -0.1)"
+);
+case!(
+    active_depth_factor_range,
+    "spacing = 0.02\n",
+    "spacing = 0.02\n\n[sph.active]\nenabled = true\ndepth_factor = 20.0\n",
+    "{}:10: key `sph.active.depth_factor`: must be in [0, 10] (got 20)"
+);
+case!(
+    active_margin_and_depth_factor,
+    "spacing = 0.02\n",
+    "spacing = 0.02\n\n[sph.active]\nenabled = true\nmargin = 0.1\ndepth_factor = 1.0\n",
+    "{}:11: key `sph.active.depth_factor`: and margin are exclusive: margin replaces 2h + depth_factor x size"
+);
+case!(
+    active_unknown_key,
+    "spacing = 0.02\n",
+    "spacing = 0.02\n\n[sph.active]\nenabled = true\nradius = 0.1\n",
+    "{}:10: key `sph.active.radius`: unknown field `radius`, expected one of `enabled`, `margin`, `depth_factor`, `travel`, `sleep_speed`, `free_flow_time` (unknown keys are errors so that nothing is silently ignored)"
+);

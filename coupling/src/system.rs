@@ -264,8 +264,9 @@ impl<T: Real> FsiSystem<T> {
         self.time
     }
 
-    /// FSI body states extrapolated `tau` seconds past the rigid world's current state.
-    fn states_at(&self, tau: f64) -> Vec<BodyState> {
+    /// FSI body states (marker order) extrapolated `tau` seconds past the rigid world's
+    /// current state.
+    pub fn states_at(&self, tau: f64) -> Vec<BodyState> {
         self.interface.bodies.iter().map(|b| extrapolate(&self.rigid.state(b.body), tau)).collect()
     }
 

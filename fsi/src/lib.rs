@@ -8,6 +8,7 @@
 //! numerical is generic over [`Real`] (`f32` or `f64`).
 #![warn(missing_docs)]
 
+pub mod active;
 pub mod config;
 pub mod cpu;
 pub mod kernel;

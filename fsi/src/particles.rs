@@ -77,6 +77,8 @@ pub struct StepReport {
     pub max_accel: f64,
     /// Soil particles still inside the domain.
     pub active: usize,
+    /// Soil particles integrated this step (all of `active` unless an active region is kept).
+    pub awake: usize,
     /// Soil–soil and soil–marker pairs visited per rate evaluation.
     pub pairs: usize,
 }

@@ -8,6 +8,7 @@
 use regolith_body::BodyState;
 
 use crate::Real;
+use crate::active::ActiveDomain;
 use crate::config::SolverConfig;
 use crate::cpu::CpuSph;
 use crate::math::{Sym3, Vec3};
@@ -67,6 +68,23 @@ pub trait SphSolver<T: Real> {
     }
     /// Particles inside the domain (the first `active()` entries).
     fn active(&self) -> usize;
+    /// Particles integrated in the last step (the first `awake()`; all of `active()` unless an
+    /// active region is kept).
+    fn awake(&self) -> usize {
+        self.active()
+    }
+    /// Keeps an active region (see [`crate::active`]) from now on, or the whole domain awake
+    /// (`None`). Backends without active regions refuse `Some`.
+    fn set_active_domain(&mut self, domain: Option<ActiveDomain>) -> Result<(), SolverError> {
+        match domain {
+            None => Ok(()),
+            Some(_) => Err(SolverError::Setup(format!("the {} backend has no active domains", self.backend()))),
+        }
+    }
+    /// Classifications of the active region so far (0 without one).
+    fn classifications(&self) -> u64 {
+        0
+    }
     /// One step of at most `max_dt` (s).
     fn step(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError>;
     /// Brings the host copy of the particles up to date (no-op on the CPU).
@@ -170,6 +188,19 @@ impl<T: Real> SphSolver<T> for CpuSph<T> {
     }
     fn active(&self) -> usize {
         CpuSph::active(self)
+    }
+    fn awake(&self) -> usize {
+        CpuSph::awake(self)
+    }
+    fn set_active_domain(&mut self, domain: Option<ActiveDomain>) -> Result<(), SolverError> {
+        CpuSph::set_active_domain(self, domain)
+    }
+    fn classifications(&self) -> u64 {
+        CpuSph::classifications(self)
+    }
+    fn place_bodies(&mut self, bodies: &[BodyMarkers<'_>], states: &[BodyState]) {
+        place_on_host(self, bodies, states);
+        self.place_boxes(states);
     }
     fn step(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
         CpuSph::step(self, max_dt)

@@ -773,6 +773,7 @@ impl GpuSph {
             max_speed: f64::from(f32::from_bits(info.vmax_end)),
             max_accel: f64::from(f32::from_bits(info.amax_end)),
             active: self.active,
+            awake: self.active,
             pairs: info.pairs as usize,
         })
     }

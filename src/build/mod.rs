@@ -15,6 +15,7 @@ pub use surface::SurfaceGrid;
 pub use vehicles::{build_vehicle_joints, place_vehicles};
 
 use regolith_coupling::{CouplingError, FsiBodyId, FsiSystem, SoilInit, grow_domain, shape_markers};
+use regolith_fsi::active::{ActiveDomain, BodyBox};
 use regolith_fsi::rheology::{Material, ParamError};
 use regolith_fsi::{Real, SolverError, SphSolver};
 use regolith_rigid::{BodyId, JointId, Motion, RigidError, RigidWorld};
@@ -60,6 +61,14 @@ pub enum BuildError {
     /// The soil solver refused its inputs.
     #[error(transparent)]
     Solver(#[from] SolverError),
+    /// Active domains were asked for on a backend without them.
+    #[error(
+        "sph.active.enabled: active domains run on the CPU backend only (this run is on {backend}); set [simulation] backend = \"cpu\" or remove [sph.active]"
+    )]
+    ActiveBackend {
+        /// The backend of the run.
+        backend: String,
+    },
     /// Terrain scenes need a container.
     #[error("a scene needs a [container]")]
     NoContainer,
@@ -186,6 +195,28 @@ pub struct Assembly<T: Real> {
     pub surface0: SurfaceGrid,
 }
 
+/// The active region of a scene (`[sph.active]`): one box per FSI body, its markers' bounding
+/// box grown by the body's margin. `None` when the scene keeps none or has no FSI body (the
+/// whole domain is then awake).
+pub fn active_domain(scene: &Scene, fsi_bodies: &[(BodyId, Vec<[f64; 3]>)]) -> Option<ActiveDomain> {
+    let a = scene.active?;
+    if fsi_bodies.is_empty() {
+        return None;
+    }
+    let specs = scene.bodies.iter().filter(|b| b.fsi);
+    let h = scene.solver.h();
+    let boxes = fsi_bodies
+        .iter()
+        .zip(specs)
+        .filter_map(|((_, local), spec)| {
+            let tight = BodyBox::around(local, 0.0)?;
+            let extent = 2.0 * tight.half.iter().copied().fold(0.0, f64::max);
+            BodyBox::around(local, a.margin_for(spec.active_margin, extent, h))
+        })
+        .collect();
+    Some(ActiveDomain { settings: a.settings, boxes })
+}
+
 /// Builds a validated scene: terrain, carving, the rigid world (container walls, bodies,
 /// vehicle joints), the FSI bodies' markers and the soil solver on the scene's backend.
 pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
@@ -237,8 +268,15 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
         domain,
     };
     let wgpu = scene.backend == Backend::Wgpu;
+    let active = active_domain(&scene, &fsi_bodies);
     let make = |c, m, p: &[_], mk: &[_], d| backend::make_solver::<T>(wgpu, c, m, p, mk, d);
-    let system = FsiSystem::with_solver(soil, rigid, fsi_bodies, scene.exchange_interval, &make)?;
+    let mut system = FsiSystem::with_solver(soil, rigid, fsi_bodies, scene.exchange_interval, &make)?;
+    if let Some(a) = active {
+        if system.fluid.backend() != "cpu" {
+            return Err(BuildError::ActiveBackend { backend: system.fluid.backend().into() });
+        }
+        system.fluid.set_active_domain(Some(a))?;
+    }
     let fsi = ids.iter().map(|id| system.fsi_body(*id)).collect();
     Ok(Assembly { system, scene, terrain, ids, fsi, vehicle_joints, surface0 })
 }

@@ -8,6 +8,39 @@ use crate::scene::{describe, load_scene};
 pub(super) fn run(path: &Path, sets: &[(String, toml::Value)]) -> Result<(), Failure> {
     let scene = load_scene(path, sets)?;
     print!("{}", describe(&scene));
+    if scene.active.is_some() {
+        print_active(&scene)?;
+    }
     println!("ok: the scene is valid");
+    Ok(())
+}
+
+/// Builds the scene (CPU, f32) and reports how many particles the active region integrates at
+/// the start: what a run's cost follows.
+fn print_active(scene: &crate::scene::Scene) -> Result<(), Failure> {
+    let mut cpu = scene.clone();
+    cpu.backend = crate::scene::Backend::Cpu;
+    let a = crate::build::assemble::<f32>(&cpu).map_err(|e| Failure::from(anyhow::Error::new(e)))?;
+    let fluid = &a.system.fluid;
+    let states = a.system.states_at(0.0);
+    let roles = fluid.as_cpu().and_then(|c| c.expected_roles(&states));
+    match roles {
+        Some(r) => {
+            let n = fluid.active().max(1);
+            println!(
+                "  active region at the start: {} awake ({:.1} % of {} particles), {} extended (frozen neighbours), {} asleep{}",
+                r.awake,
+                100.0 * r.awake as f64 / n as f64,
+                fluid.active(),
+                r.extended,
+                r.asleep,
+                match scene.active.map(|s| s.settings.free_flow_time) {
+                    Some(t) if t > 0.0 => format!("; the whole domain is awake until t = {t} s"),
+                    _ => String::new(),
+                }
+            );
+        }
+        None => println!("  active region: none (no FSI body): the whole domain is awake"),
+    }
     Ok(())
 }

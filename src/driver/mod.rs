@@ -113,7 +113,7 @@ pub struct RunStats {
     pub end_time: f64,
     /// Soil steps taken.
     pub steps: u64,
-    /// Soil particles × steps.
+    /// Integrated (awake) soil particles × steps.
     pub particle_steps: f64,
     /// Sum of neighbour pairs over steps (for the mean).
     pub pairs: f64,
@@ -125,6 +125,10 @@ pub struct RunStats {
     pub dt_min: f64,
     /// Largest soil step (s).
     pub dt_max: f64,
+    /// Fewest particles integrated in a step (the whole domain without an active region).
+    pub awake_min: usize,
+    /// Most particles integrated in a step.
+    pub awake_max: usize,
 }
 
 impl RunStats {
@@ -139,6 +143,8 @@ impl RunStats {
             last_speed: 0.0,
             dt_min: f64::INFINITY,
             dt_max: 0.0,
+            awake_min: usize::MAX,
+            awake_max: 0,
         }
     }
 
@@ -232,8 +238,12 @@ impl<'o, T: Real> Driver<'o, T> {
                 ),
             });
         }
-        let n = sim.system.fluid.active() as f64;
+        // Work follows the integrated (awake) particles, not the bed.
+        let awake = sim.system.fluid.awake();
+        let n = awake as f64;
         let s = &mut self.stats;
+        s.awake_min = s.awake_min.min(awake);
+        s.awake_max = s.awake_max.max(awake);
         s.steps += u64::from(r.fluid_steps);
         s.particle_steps += n * f64::from(r.fluid_steps);
         s.pairs += r.pairs as f64 * f64::from(r.fluid_steps);

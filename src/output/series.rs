@@ -83,10 +83,14 @@ impl Series {
             }));
         }
         columns.extend(extra.iter().map(|s| s.to_string()));
+        if sim.scene.active.is_some() {
+            columns.push("soil.awake".into());
+        }
         Self { columns, rows: Vec::new() }
     }
 
-    /// Appends a row: time, optional run label, every body's wrench and state, `extra`.
+    /// Appends a row: time, optional run label, every body's wrench and state, `extra`, and
+    /// with an active region the particles integrated in the last step (`soil.awake`).
     pub fn push<T: Real>(&mut self, sim: &Simulation<T>, run: Option<f64>, extra: &[f64]) {
         let mut row = vec![sim.time()];
         if let Some(r) = run {
@@ -104,6 +108,9 @@ impl Series {
             row.extend(vehicle_values(sim, vi));
         }
         row.extend_from_slice(extra);
+        if sim.scene.active.is_some() {
+            row.push(sim.system.fluid.awake() as f64);
+        }
         self.rows.push(row);
     }
 

@@ -173,6 +173,17 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
         mass_initial: fluid.map_or(0.0, |f| f.total_mass()),
         mass_final: fluid.map_or(0.0, |f| f.active_mass()),
         escaped_particles: fluid.map_or(0, |f| f.len() - f.active()),
+        active_domain: match fluid {
+            Some(f) if scene.active.is_some() => Some(summary::ActiveSummary {
+                awake_min: if stats.steps > 0 { stats.awake_min } else { f.awake() },
+                awake_max: stats.awake_max,
+                awake_final: f.awake(),
+                awake_mean: if stats.steps > 0 { stats.particle_steps / stats.steps as f64 } else { 0.0 },
+                inside_final: f.active(),
+                classifications: f.classifications(),
+            }),
+            _ => None,
+        },
         nan_detected: matches!(
             &failure,
             Some(RunError::Failed { cause: regolith_fsi::SolverError::NonFinite { .. }, .. })

@@ -88,6 +88,8 @@ pub struct Summary {
     pub mass_final: f64,
     /// Particles that left the domain.
     pub escaped_particles: usize,
+    /// The active region, when the scene keeps one (`[sph.active]`).
+    pub active_domain: Option<ActiveSummary>,
     /// True when the run stopped on a non-finite value.
     pub nan_detected: bool,
     /// The error that stopped the run, if any.
@@ -104,6 +106,23 @@ pub struct Summary {
     pub outputs: Vec<String>,
     /// Adjustments made while building (e.g. container snapping).
     pub notes: Vec<String>,
+}
+
+/// How many particles an active region integrated.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct ActiveSummary {
+    /// Fewest integrated in a step.
+    pub awake_min: usize,
+    /// Most integrated in a step.
+    pub awake_max: usize,
+    /// Integrated in the last step.
+    pub awake_final: usize,
+    /// Mean over steps (particle-steps / steps).
+    pub awake_mean: f64,
+    /// Soil particles inside the domain at the end (awake, extended and asleep).
+    pub inside_final: usize,
+    /// Classifications made.
+    pub classifications: u64,
 }
 
 /// The radius within which 99 % of the particles lie, about an axis, plus half a spacing

@@ -142,6 +142,14 @@ pub(super) fn resolve_body(
     if !fsi && b.bce_layers.is_some() {
         return Err(e("bce_layers", "is set but fsi = false (the body has no markers)".into()));
     }
+    if let Some(m) = b.active_margin {
+        if !fsi {
+            return Err(e("active_margin", "is set but fsi = false (only FSI bodies have active boxes)".into()));
+        }
+        if !(m.is_finite() && m >= 0.0) {
+            return Err(e("active_margin", format!("must be >= 0 m (got {m})")));
+        }
+    }
     let friction = b.friction.unwrap_or(0.5);
     if !(friction.is_finite() && friction >= 0.0) {
         return Err(e("friction", format!("must be ≥ 0 (got {friction})")));
@@ -161,5 +169,6 @@ pub(super) fn resolve_body(
         key,
         visual: None,
         initial_velocity,
+        active_margin: b.active_margin,
     })
 }

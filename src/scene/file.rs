@@ -94,6 +94,18 @@ pub(crate) struct SphFile {
     pub free_surface_threshold: Option<f64>,
     pub free_surface_stress: Option<FreeSurfaceStressName>,
     pub bce_layers: Option<i64>,
+    pub active: Option<ActiveFile>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ActiveFile {
+    pub enabled: Option<bool>,
+    pub margin: Option<f64>,
+    pub depth_factor: Option<f64>,
+    pub travel: Option<f64>,
+    pub sleep_speed: Option<f64>,
+    pub free_flow_time: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
@@ -171,6 +183,7 @@ pub(crate) struct BodyFile {
     pub fsi: Option<bool>,
     pub bce_layers: Option<i64>,
     pub friction: Option<f64>,
+    pub active_margin: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]

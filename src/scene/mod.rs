@@ -52,7 +52,7 @@ use rig::resolve_rig;
 use settings::{Settings, resolve_settings};
 use soil::resolve_soil;
 pub use types::{
-    Backend, BodySpec, DEFAULT_RUNAWAY_SPEED, OutputSpec, PlateControl, Precision, RigSpec, Scene, SceneMaterial,
+    ActiveSpec, Backend, BodySpec, DEFAULT_ACTIVE_DEPTH_FACTOR, DEFAULT_RUNAWAY_SPEED, DEFAULT_SLEEP_SPEED, OutputSpec, PlateControl, Precision, RigSpec, Scene, SceneMaterial,
     SoilSpec, WheelDrive,
 };
 
@@ -119,7 +119,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     let e = |key: &str, msg: String| key_err(path, source, key, msg);
     let dir = path.parent().unwrap_or(Path::new("."));
 
-    let Settings { end_time, backend, precision, precision_set, solver, exchange_interval } =
+    let Settings { end_time, backend, precision, precision_set, solver, exchange_interval, active } =
         resolve_settings(file.simulation.as_ref(), file.sph.as_ref(), &e)?;
     let (spacing, bce_layers) = (solver.spacing, solver.bce_layers);
     let (materials, container, soil) = resolve_soil(path, source, dir, &file, spacing, &e)?;
@@ -163,6 +163,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         runaway_speed,
         output,
         vehicles,
+        active,
     })
 }
 

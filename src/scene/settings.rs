@@ -12,6 +12,7 @@ pub(super) struct Settings {
     pub precision_set: bool,
     pub solver: SolverConfig,
     pub exchange_interval: f64,
+    pub active: Option<ActiveSpec>,
 }
 
 pub(super) fn resolve_settings(
@@ -176,7 +177,53 @@ pub(super) fn resolve_settings(
             format!("must be in (0, end_time = {end_time}] s (got {exchange_interval})"),
         ));
     }
-    Ok(Settings { end_time, backend, precision, precision_set, solver, exchange_interval })
+    let active = resolve_active(sph.active.as_ref(), &solver, e)?;
+    Ok(Settings { end_time, backend, precision, precision_set, solver, exchange_interval, active })
+}
+
+/// `[sph.active]`. Every key but `enabled` needs `enabled = true`, so that a setting is never
+/// silently ignored.
+fn resolve_active(
+    a: Option<&file::ActiveFile>,
+    solver: &SolverConfig,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<Option<ActiveSpec>, InputError> {
+    let Some(a) = a else { return Ok(None) };
+    if !a.enabled.unwrap_or(false) {
+        let set = [
+            ("margin", a.margin.is_some()),
+            ("depth_factor", a.depth_factor.is_some()),
+            ("travel", a.travel.is_some()),
+            ("sleep_speed", a.sleep_speed.is_some()),
+            ("free_flow_time", a.free_flow_time.is_some()),
+        ];
+        if let Some((k, _)) = set.iter().find(|(_, s)| *s) {
+            return Err(e(&format!("sph.active.{k}"), "is set but enabled is not true".into()));
+        }
+        return Ok(None);
+    }
+    let h = solver.h();
+    let settings = regolith_fsi::active::ActiveSettings {
+        travel: a.travel.unwrap_or(2.0 * h),
+        sleep_speed: a.sleep_speed.unwrap_or(DEFAULT_SLEEP_SPEED),
+        free_flow_time: a.free_flow_time.unwrap_or(0.0),
+    };
+    if let Err((k, msg)) = settings.validate() {
+        return Err(e(&format!("sph.active.{k}"), msg));
+    }
+    if let Some(m) = a.margin
+        && !(m.is_finite() && m >= 0.0)
+    {
+        return Err(e("sph.active.margin", format!("must be >= 0 m (got {m})")));
+    }
+    let depth_factor = a.depth_factor.unwrap_or(DEFAULT_ACTIVE_DEPTH_FACTOR);
+    if !(depth_factor.is_finite() && (0.0..=10.0).contains(&depth_factor)) {
+        return Err(e("sph.active.depth_factor", format!("must be in [0, 10] (got {depth_factor})")));
+    }
+    if a.margin.is_some() && a.depth_factor.is_some() {
+        return Err(e("sph.active.depth_factor", "and margin are exclusive: margin replaces 2h + depth_factor x size".into()));
+    }
+    Ok(Some(ActiveSpec { settings, margin: a.margin, depth_factor }))
 }
 
 /// Largest fixed step, as a fraction of `h / c` (c the stiffest material's P-wave speed): half

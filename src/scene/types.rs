@@ -80,6 +80,9 @@ pub struct BodySpec {
     pub visual: Option<ShapeDesc>,
     /// A free body's velocity at the start (m/s; `motion = { type = "free", velocity = … }`).
     pub initial_velocity: Option<[f64; 3]>,
+    /// Half-width (m) the body's active-domain box adds around its bounding box
+    /// (`active_margin`); `None` takes `[sph.active]`'s.
+    pub active_margin: Option<f64>,
 }
 
 /// How a plate is driven.
@@ -142,6 +145,31 @@ pub enum RigSpec {
 /// solution has already diverged.
 pub const DEFAULT_RUNAWAY_SPEED: f64 = 100.0;
 
+/// `[sph.active]`: how the active region is kept.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ActiveSpec {
+    /// Travel allowance, sleep speed, free-flow time.
+    pub settings: regolith_fsi::active::ActiveSettings,
+    /// Margin (m) around every FSI body's bounding box; `None`: 2h plus `depth_factor` times
+    /// the body's largest extent.
+    pub margin: Option<f64>,
+    /// The soil-disturbance depth as a multiple of a body's largest extent.
+    pub depth_factor: f64,
+}
+
+/// Default `[sph.active] depth_factor`: the disturbed soil reaches half a body's size past it.
+pub const DEFAULT_ACTIVE_DEPTH_FACTOR: f64 = 0.5;
+/// Default `[sph.active] sleep_speed` (m/s).
+pub const DEFAULT_SLEEP_SPEED: f64 = 0.01;
+
+impl ActiveSpec {
+    /// The margin around a body whose markers span `extent` (m, largest side), unless the
+    /// body sets its own.
+    pub fn margin_for(&self, own: Option<f64>, extent: f64, h: f64) -> f64 {
+        own.or(self.margin).unwrap_or(2.0 * h + self.depth_factor * extent)
+    }
+}
+
 /// A validated scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -177,6 +205,9 @@ pub struct Scene {
     pub output: OutputSpec,
     /// URDF vehicles (their links are in `bodies`).
     pub vehicles: Vec<VehicleSpec>,
+    /// The active region (`[sph.active]` with `enabled = true`); `None` integrates the whole
+    /// domain.
+    pub active: Option<ActiveSpec>,
 }
 
 /// The `[output]` section: where the run writes and what `recording.mcap` holds.

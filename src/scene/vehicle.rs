@@ -283,6 +283,7 @@ pub(crate) fn resolve_vehicle(
             key: format!("{key} link `{}`", link.name),
             visual: combine(&link.visual),
             initial_velocity: None,
+            active_margin: None,
         });
     }
     for b in &bodies[first_body..] {

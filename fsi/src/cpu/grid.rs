@@ -133,6 +133,12 @@ impl CellSort {
         self.start.truncate(cells + 1);
     }
 
+    /// The cell of each point as passed to the last [`CellSort::sort`] (input order; the
+    /// number of cells for a point outside the grid).
+    pub fn cells_of_input(&self) -> &[u32] {
+        &self.cell_of
+    }
+
     /// Number of points inside the grid.
     pub fn inside(&self) -> usize {
         self.start.last().copied().unwrap_or(0) as usize
@@ -140,6 +146,7 @@ impl CellSort {
 }
 
 /// Reorders `v` so that `v_new[k] = v_old[order[k]]`, using `tmp` as scratch.
+#[cfg(test)]
 pub fn permute<X: Copy + Send + Sync + Default>(v: &mut Vec<X>, order: &[u32], tmp: &mut Vec<X>) {
     tmp.clear();
     tmp.resize(v.len(), X::default());

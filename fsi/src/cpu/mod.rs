@@ -22,14 +22,16 @@ pub use grid::GridSpec;
 use rayon::prelude::*;
 
 use crate::Real;
+use crate::active::{ActiveDomain, ActiveSettings, Role, RoleCounts, WorldBox};
 use crate::config::{DETACHED_THRESHOLD, FreeSurfaceStress, Integrator, KernelKind, SolverConfig, TimeStep};
 use crate::kernel::{CubicSpline, Kernel, WendlandC2};
 use crate::math::{Sym3, Vec3};
 use crate::particles::{MarkerInit, ParticleInit, SolverError, StepReport};
 use crate::rheology::{Material, Moduli, PointState, RheologyError};
+use regolith_body::BodyState;
 
-use grid::{CellIndexer, CellSort, permute};
-use neighbors::NeighborList;
+use grid::{CellIndexer, CellSort};
+use neighbors::{NeighborList, TargetGroup};
 use rates::{Packed, PairConsts, Rate};
 
 /// Scratch buffers for permutations, one per element type.
@@ -115,6 +117,18 @@ pub struct CpuSph<T: Real> {
     c_max: f64,
     marker_impulse: [f64; 3],
     owner_impulse: Vec<[f64; 3]>,
+    // Active region (see `crate::active`). Soil order: awake | extended | asleep | escaped.
+    domain: Option<ActiveDomain>,
+    /// Where each body's box is now (placed with the markers).
+    boxes_now: Vec<WorldBox>,
+    /// Where they were at the last classification; `None` until one is made.
+    boxes_classified: Option<Vec<WorldBox>>,
+    /// Cells awake particles may be in until the next classification (see `active_roles`).
+    awake_cells: Vec<bool>,
+    awake: usize,
+    near: usize,
+    ext_sort: CellSort,
+    classifications: u64,
 }
 
 /// Calls a rate function instantiated for the effects that are on: each combination is its
@@ -236,6 +250,14 @@ impl<T: Real> CpuSph<T> {
             c_max: ref_cs,
             marker_impulse: [0.0; 3],
             owner_impulse: vec![[0.0; 3]; markers.iter().map(|m| m.owner as usize + 1).max().unwrap_or(1)],
+            domain: None,
+            boxes_now: Vec::new(),
+            boxes_classified: None,
+            awake_cells: Vec::new(),
+            awake: n,
+            near: n,
+            ext_sort: CellSort::default(),
+            classifications: 0,
         })
     }
 
@@ -270,6 +292,67 @@ impl<T: Real> CpuSph<T> {
     /// Particles still inside the domain; they are the first `active()` entries of every array.
     pub fn active(&self) -> usize {
         self.active
+    }
+    /// Particles integrated in the last step: the first `awake()` entries of every array
+    /// (all of `active()` unless an active region is kept).
+    pub fn awake(&self) -> usize {
+        self.awake
+    }
+    /// Awake and extended particles (extended ones: `awake()..near()`).
+    pub fn near(&self) -> usize {
+        self.near
+    }
+    /// Classifications of the active region made so far.
+    pub fn classifications(&self) -> u64 {
+        self.classifications
+    }
+    /// Keeps an active region from now on (`None`: the whole domain is awake). `domain.boxes`
+    /// has one box per FSI body, in marker-owner order (owner `k + 1` is box `k`).
+    pub fn set_active_domain(&mut self, domain: Option<ActiveDomain>) -> Result<(), SolverError> {
+        if let Some(d) = &domain {
+            if let Err((key, msg)) = d.settings.validate() {
+                return Err(SolverError::Setup(format!("active domain {key} {msg}")));
+            }
+            let bodies = self.owner_impulse.len() - 1;
+            if d.boxes.len() != bodies {
+                return Err(SolverError::Setup(format!(
+                    "active domain has {} boxes for {bodies} bodies",
+                    d.boxes.len()
+                )));
+            }
+        }
+        self.domain = domain;
+        self.boxes_now.clear();
+        self.boxes_classified = None;
+        Ok(())
+    }
+    /// Places the active-region boxes from the bodies' states (owner order).
+    pub fn place_boxes(&mut self, states: &[BodyState]) {
+        if let Some(d) = &self.domain {
+            self.boxes_now.clear();
+            self.boxes_now.extend(d.boxes.iter().zip(states).map(|(b, s)| b.place(s)));
+        }
+    }
+    /// The roles the particles would get if classified now, with the boxes placed at
+    /// `states` (what `regolith check` reports before a run; ignores the free-flow time).
+    pub fn expected_roles(&self, states: &[BodyState]) -> Option<RoleCounts> {
+        let d = self.domain.as_ref()?;
+        let boxes: Vec<WorldBox> = d.boxes.iter().zip(states).map(|(b, s)| b.place(s)).collect();
+        let n = self.active;
+        let mut cells = Vec::new();
+        let roles =
+            active_roles(
+            &self.idx,
+            &self.grid,
+            &self.pos[..n],
+            &self.vel[..n],
+            &boxes,
+            &d.settings,
+            2.0 * self.cfg.h(),
+            &mut cells,
+        );
+        let count = |r: Role| roles.iter().filter(|&&x| x == r).count();
+        Some(RoleCounts { awake: count(Role::Awake), extended: count(Role::Extended), asleep: count(Role::Asleep) })
     }
     /// Positions (m), cell-sorted.
     pub fn positions(&self) -> &[Vec3<T>] {
@@ -315,11 +398,11 @@ impl<T: Real> CpuSph<T> {
     /// Free-surface indicator of the last step's first stage: the smallest eigenvalue of
     /// `Σ V_b (x_b − x_a) ⊗ ∇W_ab` (1 in the bulk, about 0.5 in a flat top layer).
     pub fn free_surface_measure(&self) -> Vec<T> {
-        self.rates[..self.active].iter().map(|r| r.fs).collect()
+        self.rates[..self.awake].iter().map(|r| r.fs).collect()
     }
     /// Accelerations of the last stage used for the update (m/s²).
     pub fn accelerations(&self) -> Vec<Vec3<T>> {
-        self.rates[..self.active].iter().map(|r| r.acc).collect()
+        self.rates[..self.awake].iter().map(|r| r.acc).collect()
     }
     /// Marker positions (m), original order.
     pub fn marker_positions(&self) -> &[Vec3<T>] {
@@ -370,16 +453,18 @@ impl<T: Real> CpuSph<T> {
         p
     }
 
-    fn sort_and_search(&mut self) {
+    /// Reorders every per-particle array over `lo..lo + order.len()`: the particle at
+    /// `lo + k` becomes the one that was at `lo + order[k]`.
+    fn permute_soil(&mut self, lo: usize, order: &[u32]) {
         let s = &mut self.scratch;
-        self.soil_sort.sort(&self.idx, &self.pos[..self.active]);
-        let order = &self.soil_sort.order;
-        // Escaped particles beyond `active` keep their place; sort only the active prefix.
+        let r = lo..lo + order.len();
         macro_rules! perm {
             ($v:expr, $tmp:expr) => {{
-                let mut head: Vec<_> = $v[..self.active].to_vec();
-                permute(&mut head, order, &mut $tmp);
-                $v[..self.active].copy_from_slice(&head);
+                let src = &$v[r.clone()];
+                $tmp.clear();
+                $tmp.resize(order.len(), Default::default());
+                $tmp.par_iter_mut().zip(order.par_iter()).for_each(|(t, &o)| *t = src[o as usize]);
+                $v[r.clone()].copy_from_slice(&$tmp);
             }};
         }
         perm!(self.pos, s.v3);
@@ -392,7 +477,110 @@ impl<T: Real> CpuSph<T> {
         perm!(self.id, s.u32);
         perm!(self.free_surface, s.b);
         perm!(self.detached, s.b);
-        self.active = self.soil_sort.inside();
+    }
+
+    /// Sorts the awake particles (the first `awake`) by cell; those that left the grid go to
+    /// the end of the awake block.
+    fn sort_awake(&mut self) {
+        self.soil_sort.sort(&self.idx, &self.pos[..self.awake]);
+        let order = std::mem::take(&mut self.soil_sort.order);
+        self.permute_soil(0, &order);
+        self.soil_sort.order = order;
+    }
+
+    /// True while the active region is kept: a domain with boxes, placed, after the
+    /// free-flow time.
+    fn partitioned(&self) -> bool {
+        self.domain.as_ref().is_some_and(|d| {
+            !d.boxes.is_empty() && self.boxes_now.len() == d.boxes.len() && self.time >= d.settings.free_flow_time
+        })
+    }
+
+    /// True when the last classification no longer holds: none made yet, or some box has
+    /// moved farther than the travel allowance since.
+    fn needs_classification(&self) -> bool {
+        let Some(d) = &self.domain else { return false };
+        match &self.boxes_classified {
+            None => true,
+            Some(old) => {
+                old.len() != self.boxes_now.len()
+                    || self.boxes_now.iter().zip(old).any(|(b, o)| b.drift_from(o) > d.settings.travel)
+            }
+        }
+    }
+
+    /// Every awake particle (just sorted) is inside the grid and in a cell that held an
+    /// awake particle at the last classification.
+    fn awake_still_covered(&self) -> bool {
+        self.soil_sort.inside() == self.awake
+            && self.soil_sort.cells_of_input().par_iter().all(|&c| self.awake_cells.get(c as usize) == Some(&true))
+    }
+
+    /// Gives every particle inside the domain its role (see [`crate::active`]) and reorders
+    /// the arrays into awake | extended (cell-sorted) | asleep | escaped.
+    fn classify(&mut self) {
+        let Some(d) = &self.domain else { return };
+        let n = self.active;
+        let roles = active_roles(
+            &self.idx,
+            &self.grid,
+            &self.pos[..n],
+            &self.vel[..n],
+            &self.boxes_now,
+            &d.settings,
+            2.0 * self.cfg.h(),
+            &mut self.awake_cells,
+        );
+        let mut count = [0usize; 4];
+        for &r in &roles {
+            count[r as usize] += 1;
+        }
+        let mut next = [0, count[0], count[0] + count[1], count[0] + count[1] + count[2]];
+        let mut order = vec![0u32; n];
+        for (i, &r) in roles.iter().enumerate() {
+            order[next[r as usize]] = i as u32;
+            next[r as usize] += 1;
+        }
+        self.permute_soil(0, &order);
+        self.awake = count[0];
+        self.near = count[0] + count[1];
+        self.active = self.near + count[2];
+        // The extended block is cell-sorted once: it does not move until the next
+        // classification.
+        self.ext_sort.sort(&self.idx, &self.pos[self.awake..self.near]);
+        let ext_order = std::mem::take(&mut self.ext_sort.order);
+        self.permute_soil(self.awake, &ext_order);
+        self.ext_sort.order = ext_order;
+        // Frozen particles read the same state at both stages.
+        let r = self.awake..self.near;
+        self.s_pos[r.clone()].copy_from_slice(&self.pos[r.clone()]);
+        self.s_vel[r.clone()].copy_from_slice(&self.vel[r.clone()]);
+        self.s_rho[r.clone()].copy_from_slice(&self.rho[r.clone()]);
+        self.s_sigma[r.clone()].copy_from_slice(&self.sigma[r.clone()]);
+        self.s_state[r.clone()].copy_from_slice(&self.state[r]);
+        self.boxes_classified = Some(self.boxes_now.clone());
+        self.classifications += 1;
+    }
+
+    fn sort_and_search(&mut self) {
+        if self.partitioned() {
+            if self.needs_classification() {
+                self.classify();
+            }
+            self.sort_awake();
+            if !self.awake_still_covered() {
+                self.classify();
+                self.sort_awake();
+            }
+        } else {
+            // The whole domain is awake.
+            self.boxes_classified = None;
+            self.awake = self.active;
+            self.sort_awake();
+            self.active = self.soil_sort.inside();
+            self.awake = self.active;
+            self.near = self.active;
+        }
 
         // Markers: fixed walls are sorted once; bodies re-sort when their kinematics change.
         if self.markers_dirty {
@@ -409,9 +597,19 @@ impl<T: Real> CpuSph<T> {
         }
 
         let radius = T::of(2.0 * self.cfg.h());
-        let soil = &self.pos[..self.active];
-        self.nl_ss.build(soil, &self.idx, &self.soil_sort, soil, radius, true);
-        self.nl_sm.build(soil, &self.idx, &self.marker_sort, &self.ms_pos, radius, false);
+        let (awake, near) = (&self.pos[..self.awake], &self.pos[..self.near]);
+        let mut groups = vec![TargetGroup { sort: &self.soil_sort, targets: awake, offset: 0 }];
+        if self.near > self.awake {
+            groups.push(TargetGroup {
+                sort: &self.ext_sort,
+                targets: &self.pos[self.awake..self.near],
+                offset: self.awake as u32,
+            });
+        }
+        self.nl_ss.build_groups(awake, &self.idx, &groups, radius, true);
+        // Extended particles query the markers too, so that a marker's extrapolation sees all
+        // the soil a full-domain run would give it next to awake soil.
+        self.nl_sm.build(near, &self.idx, &self.marker_sort, &self.ms_pos, radius, false);
         // Only markers with soil in reach take part: the marker→soil list is the transpose.
         self.nl_ms.transpose_compact(&mut self.nl_sm, self.ms_pos.len(), &mut self.touched);
         self.m_packed.resize(self.touched.len(), Packed::default());
@@ -426,16 +624,17 @@ impl<T: Real> CpuSph<T> {
     }
 
     fn evaluate_k<K: Kernel<T>>(&mut self, from_stage: bool, with_forces: bool) {
-        let n = self.active;
+        // Rates for the awake particles; records for the awake and extended ones.
+        let (n, m) = (self.awake, self.near);
         let (pos, vel, rho, sigma, state) = if from_stage {
-            (&self.s_pos[..n], &self.s_vel[..n], &self.s_rho[..n], &self.s_sigma[..n], &self.s_state[..n])
+            (&self.s_pos[..m], &self.s_vel[..m], &self.s_rho[..m], &self.s_sigma[..m], &self.s_state[..m])
         } else {
-            (&self.pos[..n], &self.vel[..n], &self.rho[..n], &self.sigma[..n], &self.state[..n])
+            (&self.pos[..m], &self.vel[..m], &self.rho[..m], &self.sigma[..m], &self.state[..m])
         };
         let c = self.consts;
         let view =
-            rates::SoilView { pos, vel, rho, sigma, state, material: &self.material[..n], mass: &self.mass[..n] };
-        rates::pack_soil(&self.materials, &view, &mut self.packed[..n], &mut self.moduli[..n]);
+            rates::SoilView { pos, vel, rho, sigma, state, material: &self.material[..m], mass: &self.mass[..m] };
+        rates::pack_soil(&self.materials, &view, &mut self.packed[..m], &mut self.moduli[..m]);
         self.c_max = self.packed[..n].par_iter().map(|p| p.cs.as_f64()).reduce(|| self.ref_cs.as_f64(), f64::max);
         rates::extrapolate_markers::<T, K>(
             &c,
@@ -447,7 +646,7 @@ impl<T: Real> CpuSph<T> {
             self.ref_cs,
             &self.touched,
             &self.nl_ms,
-            &self.packed[..n],
+            &self.packed[..m],
             sigma,
             &mut self.m_packed,
         );
@@ -461,12 +660,12 @@ impl<T: Real> CpuSph<T> {
             !from_stage,
             soil_rates::<T, K>(
                 &c,
-                &self.packed[..n],
+                &self.packed[..m],
                 &self.m_packed,
                 &self.nl_ss,
                 &self.nl_sm,
                 sigma,
-                &self.moduli[..n],
+                &self.moduli[..m],
                 &mut self.rates[..n]
             )
         );
@@ -496,7 +695,7 @@ impl<T: Real> CpuSph<T> {
             TimeStep::Fixed(dt) => dt,
             TimeStep::Adaptive { cfl, max } => {
                 let h = self.cfg.h();
-                let n = self.active;
+                let n = self.awake;
                 let vmax = self.vel[..n].par_iter().map(|v| v.norm().as_f64()).reduce(|| 0.0, f64::max);
                 let amax = self.rates[..n].par_iter().map(|r| r.acc.norm().as_f64()).reduce(|| 0.0, f64::max);
                 let mut dt = cfl * h / (self.c_max + vmax);
@@ -515,7 +714,7 @@ impl<T: Real> CpuSph<T> {
         self.sort_and_search();
         let rk2 = self.cfg.integrator == Integrator::Rk2;
         self.evaluate(false, !rk2);
-        let n = self.active;
+        let n = self.awake;
         {
             // A particle with wall or body markers in its support is in contact, not free: it
             // keeps its stress, so that it resists penetration and carries basal friction.
@@ -566,14 +765,21 @@ impl<T: Real> CpuSph<T> {
         self.steps += 1;
         let max_speed = self.vel[..n].par_iter().map(|v| v.norm().as_f64()).reduce(|| 0.0, f64::max);
         let max_accel = self.rates[..n].par_iter().map(|r| r.acc.norm().as_f64()).reduce(|| 0.0, f64::max);
-        Ok(StepReport { dt, max_speed, max_accel, active: n, pairs: self.nl_ss.pairs() + self.nl_sm.pairs() })
+        Ok(StepReport {
+            dt,
+            max_speed,
+            max_accel,
+            active: self.active,
+            awake: n,
+            pairs: self.nl_ss.pairs() + self.nl_sm.pairs(),
+        })
     }
 
     /// Integrates from the current state with the latest rates over `dt_s`. With `to_stage`
     /// the result goes to the midpoint arrays; otherwise it replaces the current state (the
     /// positions then move with the midpoint velocity for RK2).
     fn advance(&mut self, dt: f64, dt_s: f64, to_stage: bool) -> Result<(), SolverError> {
-        let n = self.active;
+        let n = self.awake;
         let h = T::of(dt_s);
         let eps = T::of(if self.cfg.shifting.xsph() { self.cfg.xsph_epsilon } else { 0.0 });
         let shift =
@@ -658,6 +864,77 @@ impl<T: Real> CpuSph<T> {
                 })
         }
     }
+}
+
+/// The role of each particle (see [`crate::active`]): awake inside a box grown by the travel
+/// allowance or faster than the sleep speed, extended within one cell plus the search reach of
+/// a cell holding an awake particle, asleep otherwise, outside off the grid. `awake_cells`
+/// receives the cells awake particles may move in until the next classification (those they
+/// hold and one more on every side).
+fn active_roles<T: Real>(
+    idx: &CellIndexer<T>,
+    grid: &GridSpec,
+    pos: &[Vec3<T>],
+    vel: &[Vec3<T>],
+    boxes: &[WorldBox],
+    settings: &ActiveSettings,
+    radius: f64,
+    awake_cells: &mut Vec<bool>,
+) -> Vec<Role> {
+    let v2 = settings.sleep_speed * settings.sleep_speed;
+    let outside = u32::MAX;
+    let (cell, mut roles): (Vec<u32>, Vec<Role>) = pos
+        .par_iter()
+        .zip(vel.par_iter())
+        .map(|(p, v)| match idx.coords(*p) {
+            None => (outside, Role::Outside),
+            Some(c) => {
+                let x = p.as_f64();
+                let awake = v.as_f64().iter().map(|a| a * a).sum::<f64>() > v2
+                    || boxes.iter().any(|b| b.contains(x, settings.travel));
+                (idx.linear(c) as u32, if awake { Role::Awake } else { Role::Asleep })
+            }
+        })
+        .unzip();
+    let dims = grid.dims;
+    let mut held = vec![false; grid.cells()];
+    for (&c, &r) in cell.iter().zip(&roles) {
+        if r == Role::Awake {
+            held[c as usize] = true;
+        }
+    }
+    // Awake particles may drift one cell past the cells they held before the classification
+    // must be redone; the extended band reaches the search reach past that, so every awake
+    // particle's neighbours stay awake or extended meanwhile. The slack keeps the boundary
+    // particles' jitter across cell faces from forcing a classification every few steps.
+    const SLACK: usize = 1;
+    let reach = neighbors::reach(radius, grid.cell);
+    *awake_cells = dilate(&held, dims, SLACK);
+    let near = dilate(&held, dims, SLACK + reach);
+    roles.par_iter_mut().zip(cell.par_iter()).for_each(|(r, &c)| {
+        if *r == Role::Asleep && near[c as usize] {
+            *r = Role::Extended;
+        }
+    });
+    roles
+}
+
+/// The cells within `r` cells (along every axis: a cube) of a marked cell.
+fn dilate(mask: &[bool], dims: [usize; 3], r: usize) -> Vec<bool> {
+    let mut cur = mask.to_vec();
+    let stride = [dims[1] * dims[2], dims[2], 1];
+    for axis in 0..3 {
+        let mut next = cur.clone();
+        for (c, _) in cur.iter().enumerate().filter(|(_, m)| **m) {
+            let i = c / stride[axis] % dims[axis];
+            let base = c - i * stride[axis];
+            for j in i.saturating_sub(r)..=(i + r).min(dims[axis] - 1) {
+                next[base + j * stride[axis]] = true;
+            }
+        }
+        cur = next;
+    }
+    cur
 }
 
 /// Stress update with the plastic correction: `σ + dt σ̇` corrected by the material, state from

@@ -23,6 +23,22 @@ pub struct NeighborList {
 
 const CHUNK: usize = 512;
 
+/// Cells a search of `radius` scans on each side of a query's cell (edge `cell`).
+pub fn reach(radius: f64, cell: f64) -> usize {
+    (radius / cell - 1e-9).ceil().max(1.0) as usize
+}
+
+/// Targets sorted by one cell sort, listed from `offset` on.
+#[derive(Clone, Copy, Debug)]
+pub struct TargetGroup<'a, T> {
+    /// The targets' cell sort.
+    pub sort: &'a CellSort,
+    /// Target positions, in the sort's order.
+    pub targets: &'a [Vec3<T>],
+    /// Index of the group's first target in the list.
+    pub offset: u32,
+}
+
 impl NeighborList {
     /// Neighbours of `i`.
     #[inline(always)]
@@ -46,9 +62,23 @@ impl NeighborList {
         radius: T,
         same_set: bool,
     ) {
+        self.build_groups(queries, idx, &[TargetGroup { sort, targets, offset: 0 }], radius, same_set);
+    }
+
+    /// As [`NeighborList::build`] over several target groups, each sorted by its own cell sort;
+    /// group `g`'s target `j` is listed as `offset_g + j`, groups in order. With `same_set`, query
+    /// `i` does not list target `i` of a group with offset 0.
+    pub fn build_groups<T: Real>(
+        &mut self,
+        queries: &[Vec3<T>],
+        idx: &CellIndexer<T>,
+        groups: &[TargetGroup<'_, T>],
+        radius: T,
+        same_set: bool,
+    ) {
         let r2 = radius * radius;
         // Cells to scan on each side: the radius over the cell edge, rounded up.
-        let reach = (radius.as_f64() / idx.cell().as_f64() - 1e-9).ceil().max(1.0) as usize;
+        let reach = reach(radius.as_f64(), idx.cell().as_f64());
         let n = queries.len();
         let chunks = n.div_ceil(CHUNK);
         self.chunk_counts.resize_with(chunks, Vec::new);
@@ -69,17 +99,20 @@ impl NeighborList {
                         let y1 = (c[1] + reach).min(dims[1] - 1);
                         let z0 = c[2].saturating_sub(reach);
                         let z1 = (c[2] + reach).min(dims[2] - 1);
-                        for ix in x0..=x1 {
-                            for iy in y0..=y1 {
-                                let a = sort.start[idx.linear([ix, iy, z0])] as usize;
-                                let b = sort.start[idx.linear([ix, iy, z1]) + 1] as usize;
-                                for (off, t) in targets[a..b].iter().enumerate() {
-                                    let j = a + off;
-                                    if same_set && j == i {
-                                        continue;
-                                    }
-                                    if (p - *t).norm2() < r2 {
-                                        list.push(j as u32);
+                        for g in groups {
+                            let skip = if same_set && g.offset == 0 { i } else { usize::MAX };
+                            for ix in x0..=x1 {
+                                for iy in y0..=y1 {
+                                    let a = g.sort.start[idx.linear([ix, iy, z0])] as usize;
+                                    let b = g.sort.start[idx.linear([ix, iy, z1]) + 1] as usize;
+                                    for (off, t) in g.targets[a..b].iter().enumerate() {
+                                        let j = a + off;
+                                        if j == skip {
+                                            continue;
+                                        }
+                                        if (p - *t).norm2() < r2 {
+                                            list.push(g.offset + j as u32);
+                                        }
                                     }
                                 }
                             }

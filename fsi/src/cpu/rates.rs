@@ -276,7 +276,8 @@ pub(crate) fn soil_rates<
 }
 
 /// Force (N) on each touched marker (row `k` of `nl_ms`, record `markers[k]`) from the soil:
-/// minus the same pair terms the soil particles receive.
+/// minus the same pair terms the soil particles receive. Only the particles of `soil` (the
+/// awake ones) count: frozen soil listed in `nl_ms` neither pushes nor is pushed.
 pub(crate) fn marker_forces<T: Real, K: Kernel<T>, const VISC: bool>(
     c: &PairConsts<T>,
     soil: &[Packed<T>],
@@ -288,7 +289,7 @@ pub(crate) fn marker_forces<T: Real, K: Kernel<T>, const VISC: bool>(
         let pw = &markers[k];
         let mut f = Vec3::zero();
         for &a in nl_ms.of(k) {
-            let pa = &soil[a as usize];
+            let Some(pa) = soil.get(a as usize) else { continue };
             let r = pa.x - pw.x;
             let r2 = r.norm2();
             if r2 >= c.support2 {
