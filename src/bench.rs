@@ -135,3 +135,102 @@ fn bench_t<T: Real>(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -
         adapter: m.solver.adapter(),
     })
 }
+
+/// `regolith bench --scene wheel-long`: a grousered wheel at 30 % slip on a long bed.
+///
+/// A VIPER-sized wheel (R = 0.225 m plus 24 grousers of 0.03 m, width 0.2 m) turns at
+/// ω = 0.8 rad/s and moves forward at ω r (1 − 0.3) with r = 0.255 m, its axle held 0.235 m
+/// above the floor of a bed 0.2 m deep (2 cm of sinkage at the grouser tips), d0 = 2 cm,
+/// Drucker–Prager sand (φ = 30°, E = 1 MPa). The bed is `length` × 0.6 m; the wheel starts
+/// 1 m from its start. With the active region on, only the soil around the wheel is integrated.
+pub fn wheel_long_scene(length: f64, active: bool) -> Result<Scene, InputError> {
+    if !(length.is_finite() && (3.0..=100.0).contains(&length)) {
+        return Err(InputError::flag("--length", format!("must be in [3, 100] m (got {length})")));
+    }
+    let omega: f64 = 0.8;
+    let v = omega * 0.255 * (1.0 - 0.3);
+    let text = format!(
+        "[simulation]\nend_time = 1000.0\nprecision = \"f32\"\nexchange_interval = 0.001\n\n\
+         [sph]\nspacing = 0.02\n{active}\n\
+         [[materials]]\nname = \"sand\"\nmodel = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 1e6\npoisson_ratio = 0.3\nfriction_angle = 30.0\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [{length}, 0.6, 0.6]\n\n[terrain]\nmaterial = \"sand\"\ndepth = 0.2\n\n\
+         [[bodies]]\nname = \"wheel\"\nshape = {{ type = \"wheel\", radius = 0.225, width = 0.2, grousers = 24, grouser_height = 0.03, grouser_thickness = 0.01 }}\n\
+         mass = 17.5\nposition = [1.0, 0.3, 0.435]\nmotion = {{ type = \"prescribed\", linear_velocity = [{v}, 0.0, 0.0], angular_velocity = [0.0, {w}, 0.0] }}\n",
+        active = if active { "\n[sph.active]\nenabled = true\n" } else { "" },
+        w = omega.to_degrees(),
+    );
+    load_scene_source(Path::new("<bench wheel-long>"), &text, &[])
+}
+
+/// One wheel-long bench run.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct WheelBenchResult {
+    /// Active region on.
+    pub active: bool,
+    /// Soil particles in the bed.
+    pub particles: usize,
+    /// Wall and wheel markers.
+    pub markers: usize,
+    /// Mean particles integrated per step.
+    pub awake_mean: f64,
+    /// Soil steps timed.
+    pub steps: u64,
+    /// Exchanges timed.
+    pub exchanges: u64,
+    /// Mean soil step (s).
+    pub dt_mean: f64,
+    /// Simulated time timed (s).
+    pub simulated_s: f64,
+    /// Wall time (s).
+    pub seconds: f64,
+    /// Simulated seconds per wall second.
+    pub sim_s_per_wall_s: f64,
+    /// Integrated particles × steps / s.
+    pub particle_steps_per_s: f64,
+    /// Mean soil force on the wheel over the timed exchanges (N, world x and z).
+    pub force_xz: [f64; 2],
+    /// Classifications of the active region during the timed exchanges.
+    pub classifications: u64,
+    /// Rayon threads.
+    pub threads: usize,
+}
+
+/// Runs the wheel-long bench: `warmup` untimed exchanges (1 ms each), then `exchanges` timed.
+pub fn run_wheel_long(scene: &Scene, warmup: u64, exchanges: u64) -> Result<WheelBenchResult, RunError> {
+    let mut sim = crate::sim::Simulation::<f32>::new(scene)?;
+    let wheel = sim.body("wheel").expect("the bench scene has a wheel");
+    for _ in 0..warmup {
+        sim.step()?;
+    }
+    let (mut steps, mut awake_steps, mut fx, mut fz) = (0u64, 0.0, 0.0, 0.0);
+    let t0 = sim.time();
+    let c0 = sim.system.fluid.classifications();
+    let start = Instant::now();
+    for _ in 0..exchanges {
+        let r = sim.step()?;
+        steps += u64::from(r.fluid_steps);
+        awake_steps += sim.system.fluid.awake() as f64 * f64::from(r.fluid_steps);
+        let w = sim.fsi_wrench(wheel);
+        fx += w.force[0];
+        fz += w.force[2];
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let simulated = sim.time() - t0;
+    let f = &sim.system.fluid;
+    Ok(WheelBenchResult {
+        active: scene.active.is_some(),
+        particles: f.len(),
+        markers: f.marker_positions().len(),
+        awake_mean: awake_steps / steps.max(1) as f64,
+        steps,
+        exchanges,
+        dt_mean: simulated / steps.max(1) as f64,
+        simulated_s: simulated,
+        seconds,
+        sim_s_per_wall_s: simulated / seconds,
+        particle_steps_per_s: awake_steps / seconds,
+        force_xz: [fx / exchanges as f64, fz / exchanges as f64],
+        classifications: f.classifications() - c0,
+        threads: rayon::current_num_threads(),
+    })
+}

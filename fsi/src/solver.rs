@@ -239,11 +239,7 @@ impl<T: Real> SphSolver<T> for CpuSph<T> {
         CpuSph::marker_forces(self)
     }
     fn set_marker_kinematics(&mut self, first: usize, pos: &[Vec3<T>], vel: &[Vec3<T>], acc: &[Vec3<T>]) {
-        let k = self.marker_kinematics_mut();
-        let r = first..first + pos.len();
-        k.pos[r.clone()].copy_from_slice(pos);
-        k.vel[r.clone()].copy_from_slice(vel);
-        k.acc[r].copy_from_slice(acc);
+        self.set_marker_range(first, pos, vel, acc);
     }
     fn variants(&self) -> Vec<String> {
         Vec::new()

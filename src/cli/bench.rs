@@ -4,8 +4,8 @@ use std::path::Path;
 
 use anyhow::Context;
 
-use super::{BackendArg, BenchModelArg, Failure, Precision};
-use crate::bench::{BenchModel, bench_scene, run_bench};
+use super::{ActiveArg, BackendArg, BenchModelArg, Failure, Precision};
+use crate::bench::{BenchModel, bench_scene, run_bench, run_wheel_long, wheel_long_scene};
 use crate::input::InputError;
 use crate::scene;
 
@@ -62,6 +62,60 @@ pub(super) fn run(
             r.adapter
         );
         results.push(r);
+    }
+    if let Some(p) = json {
+        crate::output::write_json(p, &results).context("writing bench json")?;
+    }
+    Ok(())
+}
+
+/// `regolith bench --scene wheel-long`: timed exchanges of the wheel on the long bed, with and
+/// without the active region; `steps` and `warmup` count exchanges (1 ms each).
+pub(super) fn wheel_long(
+    active: ActiveArg,
+    length: f64,
+    steps: u64,
+    warmup: u64,
+    json: Option<&Path>,
+) -> Result<(), Failure> {
+    if steps == 0 {
+        return Err(InputError::flag("--steps", "must be at least 1").into());
+    }
+    let modes = match active {
+        ActiveArg::On => vec![true],
+        ActiveArg::Off => vec![false],
+        ActiveArg::Both => vec![false, true],
+    };
+    let mut results = Vec::new();
+    for on in modes {
+        let scene = wheel_long_scene(length, on)?;
+        let r = run_wheel_long(&scene, warmup, steps).context("bench run failed")?;
+        println!(
+            "bench wheel-long active {}: {} particles ({:.0} integrated per step), {} markers; {} exchanges, {} steps (dt {:.3e} s) in {:.2} s ({} classifications): {:.3e} simulated s per wall s, {:.3e} particle-steps/s; wheel force x {:.2} N, z {:.2} N ({} threads)",
+            if r.active { "on " } else { "off" },
+            r.particles,
+            r.awake_mean,
+            r.markers,
+            r.exchanges,
+            r.steps,
+            r.dt_mean,
+            r.seconds,
+            r.classifications,
+            r.sim_s_per_wall_s,
+            r.particle_steps_per_s,
+            r.force_xz[0],
+            r.force_xz[1],
+            r.threads
+        );
+        results.push(r);
+    }
+    if let [off, on] = &results[..] {
+        println!(
+            "bench wheel-long: active/full speed-up {:.2}x (simulated s per wall s); wheel force x {:+.2} %, z {:+.2} % against the full bed",
+            on.sim_s_per_wall_s / off.sim_s_per_wall_s,
+            100.0 * (on.force_xz[0] - off.force_xz[0]) / off.force_xz[0].abs(),
+            100.0 * (on.force_xz[1] - off.force_xz[1]) / off.force_xz[1].abs()
+        );
     }
     if let Some(p) = json {
         crate::output::write_json(p, &results).context("writing bench json")?;

@@ -66,6 +66,26 @@ pub enum BackendArg {
     Wgpu,
 }
 
+/// Which bench.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BenchSceneArg {
+    /// The granular block collapse.
+    Block,
+    /// A grousered wheel at 30 % slip crossing a long bed.
+    WheelLong,
+}
+
+/// Active region of the wheel-long bench.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ActiveArg {
+    /// Active region on.
+    On,
+    /// Whole domain.
+    Off,
+    /// Off, then on, and their ratio.
+    Both,
+}
+
 /// Bench rheology.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum BenchModelArg {
@@ -192,8 +212,18 @@ pub enum Command {
         /// Recording file.
         recording: PathBuf,
     },
-    /// Time a fixed granular block collapse (particle-steps/s, neighbour interactions/s).
+    /// Time a fixed granular block collapse (particle-steps/s, neighbour interactions/s), or a
+    /// wheel crossing a long bed with and without an active region (`--scene wheel-long`).
     Bench {
+        /// Which bench: the soil block, or a wheel at 30 % slip on a long bed.
+        #[arg(long, value_enum, default_value_t = BenchSceneArg::Block)]
+        scene: BenchSceneArg,
+        /// wheel-long only: run with the active region on, off, or both (the ratio in one run).
+        #[arg(long, value_enum)]
+        active: Option<ActiveArg>,
+        /// wheel-long only: bed length (m).
+        #[arg(long, value_name = "M")]
+        length: Option<f64>,
         /// Soil particles (about).
         #[arg(long, value_name = "N", default_value_t = 100_000)]
         particles: usize,
@@ -249,7 +279,17 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         }
         Command::Check { scene, sets } => check::run(&scene, &sets),
         Command::Bench { carve: true, json, .. } => bench::carve(json.as_deref()),
-        Command::Bench { particles, model, backend, precision, steps, warmup, json, carve: false } => {
+        Command::Bench { scene: BenchSceneArg::WheelLong, active, length, steps, warmup, json, carve: false, .. } => {
+            bench::wheel_long(active.unwrap_or(ActiveArg::Both), length.unwrap_or(10.0), steps, warmup, json.as_deref())
+        }
+        Command::Bench { scene: BenchSceneArg::Block, active, length, .. } if active.is_some() || length.is_some() => {
+            Err(InputError::flag(
+                if active.is_some() { "--active" } else { "--length" },
+                "applies to --scene wheel-long only".to_string(),
+            )
+            .into())
+        }
+        Command::Bench { particles, model, backend, precision, steps, warmup, json, carve: false, .. } => {
             bench::run(particles, model, backend, precision, steps, warmup, json.as_deref())
         }
         Command::Run { scene, out, backend, precision, sets, slips, quiet } => {

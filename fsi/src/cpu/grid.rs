@@ -94,26 +94,62 @@ impl<T: Real> CellIndexer<T> {
     }
 }
 
-/// The result of a counting sort: particles grouped by cell.
+/// The result of a counting sort: particles grouped by cell, over the window of the grid
+/// their cells span (so that sorting a few particles in a large grid costs what the few
+/// cost, not what the grid does).
 #[derive(Clone, Debug, Default)]
 pub struct CellSort {
-    /// `start[c]..start[c + 1]` are the sorted indices of cell `c`; `start[cells]` is the
-    /// number of particles inside the grid (those outside come last).
-    pub start: Vec<u32>,
-    /// `order[k]` is the old index of the particle now at position `k`.
+    /// Lower corner of the window (cell coordinates).
+    lo: [usize; 3],
+    /// Window size (cells); zero when no point is inside the grid.
+    dims: [usize; 3],
+    /// `start[c]..start[c + 1]` are the sorted indices of window cell `c`; the last entry is
+    /// the number of points inside the grid (those outside come last).
+    start: Vec<u32>,
+    /// `order[k]` is the old index of the point now at position `k`.
     pub order: Vec<u32>,
-    /// Scratch: cell of each particle before sorting.
+    /// Scratch: the cell of each point before sorting (grid-linear, then window-linear).
     cell_of: Vec<u32>,
+    next: Vec<u32>,
 }
 
 impl CellSort {
     /// Sorts points by cell (stable within a cell). Points outside the grid go to the end.
     pub fn sort<T: Real>(&mut self, idx: &CellIndexer<T>, pos: &[Vec3<T>]) {
-        let cells = idx.dims[0] * idx.dims[1] * idx.dims[2];
-        let outside = cells as u32;
+        const OUT: u32 = u32::MAX;
         self.cell_of.resize(pos.len(), 0);
-        self.cell_of.par_iter_mut().zip(pos.par_iter()).for_each(|(c, p)| {
-            *c = idx.coords(*p).map(|c3| idx.linear(c3) as u32).unwrap_or(outside);
+        let (lo, hi) = self
+            .cell_of
+            .par_iter_mut()
+            .zip(pos.par_iter())
+            .map(|(c, p)| match idx.coords(*p) {
+                Some(c3) => {
+                    *c = idx.linear(c3) as u32;
+                    (c3, c3)
+                }
+                None => {
+                    *c = OUT;
+                    ([usize::MAX; 3], [0; 3])
+                }
+            })
+            .reduce(
+                || ([usize::MAX; 3], [0; 3]),
+                |a, b| ([0, 1, 2].map(|k| a.0[k].min(b.0[k])), [0, 1, 2].map(|k| a.1[k].max(b.1[k]))),
+            );
+        let any = lo[0] != usize::MAX;
+        self.lo = if any { lo } else { [0; 3] };
+        self.dims = if any { [0, 1, 2].map(|k| hi[k] - lo[k] + 1) } else { [0; 3] };
+        let cells = self.dims[0] * self.dims[1] * self.dims[2];
+        let outside = cells as u32;
+        let (g, w, o) = (idx.dims(), self.dims, self.lo);
+        self.cell_of.par_iter_mut().for_each(|c| {
+            *c = if *c == OUT {
+                outside
+            } else {
+                let c0 = *c as usize;
+                let (x, y, z) = (c0 / (g[1] * g[2]), c0 / g[2] % g[1], c0 % g[2]);
+                (((x - o[0]) * w[1] + (y - o[1])) * w[2] + (z - o[2])) as u32
+            }
         });
         self.start.clear();
         self.start.resize(cells + 2, 0);
@@ -124,19 +160,31 @@ impl CellSort {
             self.start[c + 1] += self.start[c];
         }
         self.order.resize(pos.len(), 0);
-        let mut next: Vec<u32> = self.start[..=cells].to_vec();
+        self.next.clear();
+        self.next.extend_from_slice(&self.start[..=cells]);
         for (i, &c) in self.cell_of.iter().enumerate() {
-            let slot = &mut next[c as usize];
+            let slot = &mut self.next[c as usize];
             self.order[*slot as usize] = i as u32;
             *slot += 1;
         }
         self.start.truncate(cells + 1);
     }
 
-    /// The cell of each point as passed to the last [`CellSort::sort`] (input order; the
-    /// number of cells for a point outside the grid).
-    pub fn cells_of_input(&self) -> &[u32] {
-        &self.cell_of
+    /// The sorted index range of the cells `(ix, iy, z0..=z1)` (grid coordinates): one
+    /// contiguous run, empty where the column misses the window.
+    #[inline(always)]
+    pub fn column(&self, ix: usize, iy: usize, z0: usize, z1: usize) -> (usize, usize) {
+        let (lo, d) = (self.lo, self.dims);
+        if ix < lo[0] || ix >= lo[0] + d[0] || iy < lo[1] || iy >= lo[1] + d[1] {
+            return (0, 0);
+        }
+        let za = z0.max(lo[2]);
+        let zb = z1.min(lo[2] + d[2] - 1);
+        if za > zb {
+            return (0, 0);
+        }
+        let base = ((ix - lo[0]) * d[1] + (iy - lo[1])) * d[2];
+        (self.start[base + za - lo[2]] as usize, self.start[base + zb - lo[2] + 1] as usize)
     }
 
     /// Number of points inside the grid.
@@ -177,8 +225,15 @@ mod tests {
         assert_eq!(&s.order[..4], &[1, 3, 5, 0]);
         // z-fastest: cells (0,0,0) and (0,0,1) are adjacent in the order.
         assert_eq!(idx.linear([0, 0, 1]), idx.linear([0, 0, 0]) + 1);
-        let c0 = idx.linear([0, 0, 0]);
-        assert_eq!(s.start[c0 + 1] - s.start[c0], 2);
+        assert_eq!(s.column(0, 0, 0, 0), (0, 2));
+        assert_eq!(s.column(0, 0, 0, 3), (0, 3));
+        // Outside the window of occupied cells, columns are empty.
+        assert_eq!(s.column(1, 0, 0, 3), (3, 3));
+        assert_eq!(s.column(0, 2, 0, 3), (3, 3));
+        assert_eq!(s.column(3, 3, 3, 3), (3, 4));
+        let mut empty = CellSort::default();
+        empty.sort(&idx, &[Vec3::new(5.0, 0.0, 0.0)]);
+        assert_eq!((empty.inside(), empty.column(0, 0, 0, 3)), (0, (0, 0)));
         let mut v: Vec<u32> = (0..6).collect();
         let mut tmp = Vec::new();
         permute(&mut v, &s.order, &mut tmp);

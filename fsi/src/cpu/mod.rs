@@ -90,7 +90,8 @@ pub struct CpuSph<T: Real> {
     m_acc: Vec<Vec3<T>>,
     m_owner: Vec<u32>,
     m_force: Vec<Vec3<T>>,
-    // Markers inside the grid, in cell order (index k ↔ original marker_sort.order[k]).
+    // Markers inside the grid, walls then bodies, each in cell order (index k ↔ original
+    // ms_orig[k]).
     ms_pos: Vec<Vec3<T>>,
     ms_vel: Vec<Vec3<T>>,
     ms_acc: Vec<Vec3<T>>,
@@ -107,7 +108,16 @@ pub struct CpuSph<T: Real> {
     grid: GridSpec,
     idx: CellIndexer<T>,
     soil_sort: CellSort,
-    marker_sort: CellSort,
+    /// Fixed-wall (owner 0) and body markers, original indices.
+    wall_ids: Vec<u32>,
+    body_ids: Vec<u32>,
+    wall_sort: CellSort,
+    body_sort: CellSort,
+    walls_sorted: bool,
+    /// Walls inside the grid: the first `n_wall_sorted` sorted markers.
+    n_wall_sorted: usize,
+    /// Original index of each sorted marker.
+    ms_orig: Vec<u32>,
     nl_ss: NeighborList,
     nl_sm: NeighborList,
     nl_ms: NeighborList,
@@ -240,7 +250,13 @@ impl<T: Real> CpuSph<T> {
             idx: CellIndexer::new(&grid),
             grid,
             soil_sort: CellSort::default(),
-            marker_sort: CellSort::default(),
+            wall_ids: (0..nm as u32).filter(|&k| markers[k as usize].owner == 0).collect(),
+            body_ids: (0..nm as u32).filter(|&k| markers[k as usize].owner != 0).collect(),
+            wall_sort: CellSort::default(),
+            body_sort: CellSort::default(),
+            walls_sorted: false,
+            n_wall_sorted: 0,
+            ms_orig: Vec::new(),
             nl_ss: NeighborList::default(),
             nl_sm: NeighborList::default(),
             nl_ms: NeighborList::default(),
@@ -418,10 +434,24 @@ impl<T: Real> CpuSph<T> {
         &self.m_force
     }
     /// Prescribed marker kinematics (original order), for markers that belong to moving
-    /// bodies. Taking it marks the markers for re-sorting at the next step.
+    /// bodies. Taking it marks every marker, fixed walls included, for re-sorting at the next
+    /// step; [`CpuSph::set_marker_range`] re-sorts only what it moves.
     pub fn marker_kinematics_mut(&mut self) -> MarkerKinematics<'_, T> {
         self.markers_dirty = true;
+        self.walls_sorted = false;
         MarkerKinematics { pos: &mut self.m_pos, vel: &mut self.m_vel, acc: &mut self.m_acc, owner: &self.m_owner }
+    }
+    /// Sets the kinematics of the markers `first..first + pos.len()` (original order); the
+    /// fixed walls are sorted again only if the range holds some.
+    pub fn set_marker_range(&mut self, first: usize, pos: &[Vec3<T>], vel: &[Vec3<T>], acc: &[Vec3<T>]) {
+        let r = first..first + pos.len();
+        self.m_pos[r.clone()].copy_from_slice(pos);
+        self.m_vel[r.clone()].copy_from_slice(vel);
+        self.m_acc[r.clone()].copy_from_slice(acc);
+        self.markers_dirty = true;
+        if self.m_owner[r].contains(&0) {
+            self.walls_sorted = false;
+        }
     }
     /// Total impulse the markers have exerted on the soil since the start (N s).
     pub fn marker_impulse(&self) -> [f64; 3] {
@@ -513,7 +543,9 @@ impl<T: Real> CpuSph<T> {
     /// awake particle at the last classification.
     fn awake_still_covered(&self) -> bool {
         self.soil_sort.inside() == self.awake
-            && self.soil_sort.cells_of_input().par_iter().all(|&c| self.awake_cells.get(c as usize) == Some(&true))
+            && self.pos[..self.awake].par_iter().all(|p| {
+                self.idx.coords(*p).is_some_and(|c| self.awake_cells.get(self.idx.linear(c)) == Some(&true))
+            })
     }
 
     /// Gives every particle inside the domain its role (see [`crate::active`]) and reorders
@@ -583,10 +615,25 @@ impl<T: Real> CpuSph<T> {
         }
 
         // Markers: fixed walls are sorted once; bodies re-sort when their kinematics change.
+        // Sorted markers are walls (cell order) then bodies (cell order); `ms_orig` maps each
+        // back to its original index.
+        if !self.walls_sorted {
+            let wall_pos: Vec<Vec3<T>> = self.wall_ids.iter().map(|&o| self.m_pos[o as usize]).collect();
+            self.wall_sort.sort(&self.idx, &wall_pos);
+            let inside = self.wall_sort.inside();
+            self.ms_orig.clear();
+            self.ms_orig.extend(self.wall_sort.order[..inside].iter().map(|&k| self.wall_ids[k as usize]));
+            self.n_wall_sorted = inside;
+            self.walls_sorted = true;
+            self.markers_dirty = true;
+        }
         if self.markers_dirty {
-            self.marker_sort.sort(&self.idx, &self.m_pos);
-            let inside = self.marker_sort.inside();
-            let mo = &self.marker_sort.order[..inside];
+            let body_pos: Vec<Vec3<T>> = self.body_ids.iter().map(|&o| self.m_pos[o as usize]).collect();
+            self.body_sort.sort(&self.idx, &body_pos);
+            let inside = self.body_sort.inside();
+            self.ms_orig.truncate(self.n_wall_sorted);
+            self.ms_orig.extend(self.body_sort.order[..inside].iter().map(|&k| self.body_ids[k as usize]));
+            let mo = &self.ms_orig;
             self.ms_pos.clear();
             self.ms_pos.extend(mo.iter().map(|&o| self.m_pos[o as usize]));
             self.ms_vel.clear();
@@ -609,7 +656,12 @@ impl<T: Real> CpuSph<T> {
         self.nl_ss.build_groups(awake, &self.idx, &groups, radius, true);
         // Extended particles query the markers too, so that a marker's extrapolation sees all
         // the soil a full-domain run would give it next to awake soil.
-        self.nl_sm.build(near, &self.idx, &self.marker_sort, &self.ms_pos, radius, false);
+        let nw = self.n_wall_sorted;
+        let marker_groups = [
+            TargetGroup { sort: &self.wall_sort, targets: &self.ms_pos[..nw], offset: 0 },
+            TargetGroup { sort: &self.body_sort, targets: &self.ms_pos[nw..], offset: nw as u32 },
+        ];
+        self.nl_sm.build_groups(near, &self.idx, &marker_groups, radius, false);
         // Only markers with soil in reach take part: the marker→soil list is the transpose.
         self.nl_ms.transpose_compact(&mut self.nl_sm, self.ms_pos.len(), &mut self.touched);
         self.m_packed.resize(self.touched.len(), Packed::default());
@@ -747,7 +799,7 @@ impl<T: Real> CpuSph<T> {
             *f = Vec3::zero();
         }
         for (k, &sorted) in self.touched.iter().enumerate() {
-            let o = self.marker_sort.order[sorted as usize] as usize;
+            let o = self.ms_orig[sorted as usize] as usize;
             self.m_force[o] = self.ms_force[k];
             let f = self.ms_force[k].as_f64();
             for (t, fa) in total.iter_mut().zip(f) {

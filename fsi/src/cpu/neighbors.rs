@@ -19,6 +19,9 @@ pub struct NeighborList {
     pub indices: Vec<u32>,
     chunk_counts: Vec<Vec<u32>>,
     chunk_lists: Vec<Vec<u32>>,
+    /// Transpose scratch, one entry per target, zero (and `u32::MAX`) between calls.
+    count: Vec<u32>,
+    row_of: Vec<u32>,
 }
 
 const CHUNK: usize = 512;
@@ -53,6 +56,7 @@ impl NeighborList {
 
     /// Builds the list of targets (sorted by `sort` over `idx`, positions `targets`) within
     /// `radius` of each query point. With `same_set`, a query does not list itself.
+    #[cfg(test)]
     pub fn build<T: Real>(
         &mut self,
         queries: &[Vec3<T>],
@@ -103,8 +107,7 @@ impl NeighborList {
                             let skip = if same_set && g.offset == 0 { i } else { usize::MAX };
                             for ix in x0..=x1 {
                                 for iy in y0..=y1 {
-                                    let a = g.sort.start[idx.linear([ix, iy, z0])] as usize;
-                                    let b = g.sort.start[idx.linear([ix, iy, z1]) + 1] as usize;
+                                    let (a, b) = g.sort.column(ix, iy, z0, z1);
                                     for (off, t) in g.targets[a..b].iter().enumerate() {
                                         let j = a + off;
                                         if j == skip {
@@ -155,22 +158,25 @@ impl NeighborList {
     /// `other`'s target indices are then renumbered to rows of `touched`, so both lists index
     /// the same compact per-target arrays.
     pub fn transpose_compact(&mut self, other: &mut NeighborList, targets: usize, touched: &mut Vec<u32>) {
-        let mut count = vec![0u32; targets];
-        for &j in &other.indices {
-            count[j as usize] += 1;
-        }
+        // Per-target scratch kept between calls and reset only where touched: the cost
+        // follows the pairs, not the number of targets.
+        let (count, row_of) = (&mut self.count, &mut self.row_of);
+        count.resize(targets, 0);
+        row_of.resize(targets, u32::MAX);
         touched.clear();
-        let mut row_of = vec![u32::MAX; targets];
-        for (j, &c) in count.iter().enumerate() {
-            if c > 0 {
-                row_of[j] = touched.len() as u32;
-                touched.push(j as u32);
+        for &j in &other.indices {
+            let c = &mut count[j as usize];
+            if *c == 0 {
+                touched.push(j);
             }
+            *c += 1;
         }
+        touched.sort_unstable();
         self.offsets.clear();
         self.offsets.push(0);
         let mut total = 0;
-        for &j in touched.iter() {
+        for (row, &j) in touched.iter().enumerate() {
+            row_of[j as usize] = row as u32;
             total += count[j as usize];
             self.offsets.push(total);
         }
@@ -183,7 +189,12 @@ impl NeighborList {
                 next[row] += 1;
             }
         }
+        let row_of = &*row_of;
         other.indices.par_iter_mut().for_each(|j| *j = row_of[*j as usize]);
+        for &j in touched.iter() {
+            self.count[j as usize] = 0;
+            self.row_of[j as usize] = u32::MAX;
+        }
     }
 }
 
