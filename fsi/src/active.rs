@@ -202,7 +202,8 @@ mod tests {
         for i in 0..=10 {
             for j in 0..=10 {
                 let (u, v) = (i as f64 / 5.0 - 1.0, j as f64 / 5.0 - 1.0);
-                let p = [0, 1, 2].map(|k| w1.center[k] + u * w1.half[0] * w1.axes[0][k] + v * w1.half[2] * w1.axes[2][k]);
+                let p =
+                    [0, 1, 2].map(|k| w1.center[k] + u * w1.half[0] * w1.axes[0][k] + v * w1.half[2] * w1.axes[2][k]);
                 assert!(w1.contains(p, 1e-12));
                 assert!(w0.contains(p, d + 1e-12), "point {p:?} outside the old box grown by {d}");
             }

@@ -279,7 +279,9 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         }
         Command::Check { scene, sets } => check::run(&scene, &sets),
         Command::Bench { carve: true, json, .. } => bench::carve(json.as_deref()),
-        Command::Bench { scene: BenchSceneArg::WheelLong, active, length, steps, warmup, json, carve: false, .. } => {
+        Command::Bench {
+            scene: BenchSceneArg::WheelLong, active, length, steps, warmup, json, carve: false, ..
+        } => {
             bench::wheel_long(active.unwrap_or(ActiveArg::Both), length.unwrap_or(10.0), steps, warmup, json.as_deref())
         }
         Command::Bench { scene: BenchSceneArg::Block, active, length, .. } if active.is_some() || length.is_some() => {

@@ -52,8 +52,8 @@ use rig::resolve_rig;
 use settings::{Settings, resolve_settings};
 use soil::resolve_soil;
 pub use types::{
-    ActiveSpec, Backend, BodySpec, DEFAULT_ACTIVE_DEPTH_FACTOR, DEFAULT_RUNAWAY_SPEED, DEFAULT_SLEEP_SPEED, OutputSpec, PlateControl, Precision, RigSpec, Scene, SceneMaterial,
-    SoilSpec, WheelDrive,
+    ActiveSpec, Backend, BodySpec, DEFAULT_ACTIVE_DEPTH_FACTOR, DEFAULT_RUNAWAY_SPEED, DEFAULT_SLEEP_SPEED, OutputSpec,
+    PlateControl, Precision, RigSpec, Scene, SceneMaterial, SoilSpec, WheelDrive,
 };
 
 pub use vehicle::{Profile, VehicleSpec, WheelSpec};

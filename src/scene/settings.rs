@@ -221,7 +221,10 @@ fn resolve_active(
         return Err(e("sph.active.depth_factor", format!("must be in [0, 10] (got {depth_factor})")));
     }
     if a.margin.is_some() && a.depth_factor.is_some() {
-        return Err(e("sph.active.depth_factor", "and margin are exclusive: margin replaces 2h + depth_factor x size".into()));
+        return Err(e(
+            "sph.active.depth_factor",
+            "and margin are exclusive: margin replaces 2h + depth_factor x size".into(),
+        ));
     }
     Ok(Some(ActiveSpec { settings, margin: a.margin, depth_factor }))
 }

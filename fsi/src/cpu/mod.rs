@@ -356,9 +356,7 @@ impl<T: Real> CpuSph<T> {
         let boxes: Vec<WorldBox> = d.boxes.iter().zip(states).map(|(b, s)| b.place(s)).collect();
         let n = self.active;
         let mut cells = Vec::new();
-        let roles =
-            active_roles(
-            &self.idx,
+        let roles = active_roles(
             &self.grid,
             &self.pos[..n],
             &self.vel[..n],
@@ -543,9 +541,9 @@ impl<T: Real> CpuSph<T> {
     /// awake particle at the last classification.
     fn awake_still_covered(&self) -> bool {
         self.soil_sort.inside() == self.awake
-            && self.pos[..self.awake].par_iter().all(|p| {
-                self.idx.coords(*p).is_some_and(|c| self.awake_cells.get(self.idx.linear(c)) == Some(&true))
-            })
+            && self.pos[..self.awake]
+                .par_iter()
+                .all(|p| self.idx.coords(*p).is_some_and(|c| self.awake_cells.get(self.idx.linear(c)) == Some(&true)))
     }
 
     /// Gives every particle inside the domain its role (see [`crate::active`]) and reorders
@@ -554,7 +552,6 @@ impl<T: Real> CpuSph<T> {
         let Some(d) = &self.domain else { return };
         let n = self.active;
         let roles = active_roles(
-            &self.idx,
             &self.grid,
             &self.pos[..n],
             &self.vel[..n],
@@ -924,7 +921,6 @@ impl<T: Real> CpuSph<T> {
 /// receives the cells awake particles may move in until the next classification (those they
 /// hold and one more on every side).
 fn active_roles<T: Real>(
-    idx: &CellIndexer<T>,
     grid: &GridSpec,
     pos: &[Vec3<T>],
     vel: &[Vec3<T>],
@@ -933,6 +929,7 @@ fn active_roles<T: Real>(
     radius: f64,
     awake_cells: &mut Vec<bool>,
 ) -> Vec<Role> {
+    let idx = CellIndexer::<T>::new(grid);
     let v2 = settings.sleep_speed * settings.sleep_speed;
     let outside = u32::MAX;
     let (cell, mut roles): (Vec<u32>, Vec<Role>) = pos
