@@ -537,8 +537,8 @@ impl<T: Real> CpuSph<T> {
         }
     }
 
-    /// Every awake particle (just sorted) is inside the grid and in a cell that held an
-    /// awake particle at the last classification.
+    /// Every awake particle (just sorted) is inside the grid and in a cell awake particles may
+    /// be in since the last classification (one it held, or a neighbour of one).
     fn awake_still_covered(&self) -> bool {
         self.soil_sort.inside() == self.awake
             && self.pos[..self.awake]
