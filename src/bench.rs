@@ -198,7 +198,9 @@ pub struct WheelBenchResult {
 /// Runs the wheel-long bench: `warmup` untimed exchanges (1 ms each), then `exchanges` timed.
 pub fn run_wheel_long(scene: &Scene, warmup: u64, exchanges: u64) -> Result<WheelBenchResult, RunError> {
     let mut sim = crate::sim::Simulation::<f32>::new(scene)?;
-    let wheel = sim.body("wheel").expect("the bench scene has a wheel");
+    let wheel = sim.body("wheel").ok_or_else(|| {
+        RunError::Solver(regolith_fsi::SolverError::Setup("the wheel-long scene has no body \"wheel\"".into()))
+    })?;
     for _ in 0..warmup {
         sim.step()?;
     }

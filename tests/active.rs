@@ -155,6 +155,10 @@ fn a_wheel_on_an_active_domain_pulls_sinks_and_turns_as_on_the_full_bed() {
 #[test]
 fn the_wgpu_backend_refuses_active_domains_naming_the_key() {
     let text = glider("\n[sph.active]\nenabled = true\n").replace("precision = \"f32\"", "backend = \"wgpu\"");
-    let e = Simulation::<f32>::new(&common::scene(&text)).err().expect("refused").to_string();
-    assert!(e.starts_with("sph.active.enabled: active domains run on the CPU backend only"), "{e}");
+    let scene = common::scene(&text);
+    let e = Simulation::<f32>::new(&scene).err().expect("refused").to_string();
+    let head =
+        format!("{}: key `sph.active.enabled`: active domains run on the CPU backend only", scene.path.display());
+    assert!(e.starts_with(&head), "{e}");
+    assert!(!e.contains('\n'), "one line: {e}");
 }

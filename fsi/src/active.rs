@@ -59,10 +59,9 @@ pub struct BodyBox {
 }
 
 impl BodyBox {
-    /// The bounding box of body-frame points grown by `margin` (m) on every side; `None` for
-    /// no points.
-    pub fn around(points: &[[f64; 3]], margin: f64) -> Option<Self> {
-        let first = points.first()?;
+    /// The bounding box of body-frame points (a point box at the body origin for none).
+    pub fn around(points: &[[f64; 3]]) -> Self {
+        let Some(first) = points.first() else { return Self { center: [0.0; 3], half: [0.0; 3] } };
         let (mut lo, mut hi) = (*first, *first);
         for p in points {
             for k in 0..3 {
@@ -70,10 +69,12 @@ impl BodyBox {
                 hi[k] = hi[k].max(p[k]);
             }
         }
-        Some(Self {
-            center: [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k])),
-            half: [0, 1, 2].map(|k| 0.5 * (hi[k] - lo[k]) + margin),
-        })
+        Self { center: [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k])), half: [0, 1, 2].map(|k| 0.5 * (hi[k] - lo[k])) }
+    }
+
+    /// The box grown by `margin` (m) on every side.
+    pub fn grown(&self, margin: f64) -> Self {
+        Self { center: self.center, half: self.half.map(|h| h + margin) }
     }
 
     /// Where the box is for a body in state `s`.
@@ -184,7 +185,8 @@ mod tests {
 
     #[test]
     fn a_box_follows_its_body_and_its_drift_bounds_every_point() {
-        let b = BodyBox::around(&[[-0.1, -0.05, -0.1], [0.1, 0.05, 0.1]], 0.02).unwrap();
+        let b = BodyBox::around(&[[-0.1, -0.05, -0.1], [0.1, 0.05, 0.1]]).grown(0.02);
+        assert_eq!(BodyBox::around(&[]).grown(0.1).half, [0.1; 3]);
         for (h, want) in b.half.iter().zip([0.12, 0.07, 0.12]) {
             assert!((h - want).abs() < 1e-15);
         }

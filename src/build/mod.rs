@@ -63,9 +63,12 @@ pub enum BuildError {
     Solver(#[from] SolverError),
     /// Active domains were asked for on a backend without them.
     #[error(
-        "sph.active.enabled: active domains run on the CPU backend only (this run is on {backend}); set [simulation] backend = \"cpu\" or remove [sph.active]"
+        "{}: key `sph.active.enabled`: active domains run on the CPU backend only (this run is on {backend}); set [simulation] backend = \"cpu\" or remove [sph.active]",
+        file.display()
     )]
     ActiveBackend {
+        /// The scene file.
+        file: std::path::PathBuf,
         /// The backend of the run.
         backend: String,
     },
@@ -208,10 +211,10 @@ pub fn active_domain(scene: &Scene, fsi_bodies: &[(BodyId, Vec<[f64; 3]>)]) -> O
     let boxes = fsi_bodies
         .iter()
         .zip(specs)
-        .filter_map(|((_, local), spec)| {
-            let tight = BodyBox::around(local, 0.0)?;
+        .map(|((_, local), spec)| {
+            let tight = BodyBox::around(local);
             let extent = 2.0 * tight.half.iter().copied().fold(0.0, f64::max);
-            BodyBox::around(local, a.margin_for(spec.active_margin, extent, h))
+            tight.grown(a.margin_for(spec.active_margin, extent, h))
         })
         .collect();
     Some(ActiveDomain { settings: a.settings, boxes })
@@ -273,7 +276,7 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
     let mut system = FsiSystem::with_solver(soil, rigid, fsi_bodies, scene.exchange_interval, &make)?;
     if let Some(a) = active {
         if system.fluid.backend() != "cpu" {
-            return Err(BuildError::ActiveBackend { backend: system.fluid.backend().into() });
+            return Err(BuildError::ActiveBackend { file: scene.path.clone(), backend: system.fluid.backend().into() });
         }
         system.fluid.set_active_domain(Some(a))?;
     }
