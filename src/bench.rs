@@ -63,6 +63,12 @@ pub struct BenchResult {
     pub threads: usize,
     /// Device adapter (`cpu` for the CPU backend).
     pub adapter: String,
+    /// Verlet skin of the neighbour lists (multiple of h); with a skin the pair counts above
+    /// are listed pairs (within 2h + skin), not pairs within the support.
+    pub neighbor_skin: f64,
+    /// Neighbour-list builds during the timed steps (CPU backend; the wgpu backend rebuilds
+    /// every step).
+    pub list_builds: u64,
 }
 
 /// The smallest bench block: 4 × 4 × 8 particles.
@@ -113,6 +119,7 @@ fn bench_t<T: Real>(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -
         m.solver.step(None)?;
     }
     let evals = if scene.solver.integrator == regolith_fsi::config::Integrator::Rk2 { 2.0 } else { 1.0 };
+    let builds0 = m.solver.as_cpu().map_or(0, |c| c.list_builds());
     let start = Instant::now();
     let mut pairs = 0.0;
     for _ in 0..steps {
@@ -133,6 +140,8 @@ fn bench_t<T: Real>(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -
         neighbours_per_particle: pairs / (steps as f64 * n as f64),
         threads: rayon::current_num_threads(),
         adapter: m.solver.adapter(),
+        neighbor_skin: scene.solver.neighbor_skin,
+        list_builds: m.solver.as_cpu().map_or(steps, |c| c.list_builds() - builds0),
     })
 }
 
@@ -193,6 +202,10 @@ pub struct WheelBenchResult {
     pub classifications: u64,
     /// Rayon threads.
     pub threads: usize,
+    /// Verlet skin of the neighbour lists (multiple of h).
+    pub neighbor_skin: f64,
+    /// Neighbour-list builds during the timed exchanges.
+    pub list_builds: u64,
 }
 
 /// Runs the wheel-long bench: `warmup` untimed exchanges (1 ms each), then `exchanges` timed.
@@ -207,6 +220,7 @@ pub fn run_wheel_long(scene: &Scene, warmup: u64, exchanges: u64) -> Result<Whee
     let (mut steps, mut awake_steps, mut fx, mut fz) = (0u64, 0.0, 0.0, 0.0);
     let t0 = sim.time();
     let c0 = sim.system.fluid.classifications();
+    let builds0 = sim.system.fluid.as_cpu().map_or(0, |c| c.list_builds());
     let start = Instant::now();
     for _ in 0..exchanges {
         let r = sim.step()?;
@@ -234,5 +248,7 @@ pub fn run_wheel_long(scene: &Scene, warmup: u64, exchanges: u64) -> Result<Whee
         force_xz: [fx / exchanges as f64, fz / exchanges as f64],
         classifications: f.classifications() - c0,
         threads: rayon::current_num_threads(),
+        neighbor_skin: scene.solver.neighbor_skin,
+        list_builds: f.as_cpu().map_or(steps, |c| c.list_builds() - builds0),
     })
 }

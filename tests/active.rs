@@ -92,9 +92,16 @@ fn sleeping_soil_keeps_its_state_bit_for_bit_and_wakes_without_a_jump() {
     assert!(woken > 500, "the glider must wake soil ahead of it ({woken} woken)");
     assert!(f.awake() < f.active() / 2, "most of the bed sleeps: {} of {} awake", f.awake(), f.active());
     // A woken particle continues from the state it slept with: over its first exchange awake
-    // its stress changes no more than the awake soil's own does over one exchange (the bed's
-    // jitter, 3e-2 ρgH here), and it moves slower than the sleep speed.
-    assert!(worst_jump <= background, "stress jump on waking: {worst_jump:.3e} ρgH, awake soil {background:.3e} ρgH");
+    // its stress changes about as much as the awake soil's own does over one exchange (the
+    // bed's jitter, 2–3e-2 ρgH here), and it moves slower than the sleep speed. Both figures
+    // are maxima over noisy samples: round-off alone moves them (1.9e-2 vs 2.8e-2 rebuilding
+    // the lists every step, 2.5e-2 vs 2.2e-2 with the default skin), so the bound is twice
+    // the jitter; waking with a wrong state (zero, or another particle's) changes it by the order
+    // of the stress itself, 0.1–1 ρgH.
+    assert!(
+        worst_jump <= 2.0 * background,
+        "stress jump on waking: {worst_jump:.3e} ρgH, awake soil {background:.3e} ρgH"
+    );
     assert!(worst_speed < 0.01, "speed on waking: {worst_speed:.3e} m/s");
     assert!(f.classifications() > 1, "the moving box must be followed");
 }

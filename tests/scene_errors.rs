@@ -179,6 +179,28 @@ case!(
     "{}:8: key `sph.xsph_epsilon`: applies only when shifting includes \"xsph\""
 );
 case!(
+    neighbor_skin_out_of_range,
+    "spacing = 0.02",
+    "spacing = 0.02\nneighbor_skin = 1.5",
+    "{}:7: key `sph.neighbor_skin`: must be in [0, 1] (a multiple of h; 0 rebuilds the lists every step; got 1.5)"
+);
+#[test]
+fn neighbor_skin_on_wgpu() {
+    let text = BASE.replacen("dt = \"auto\"", "dt = \"auto\"\nbackend = \"wgpu\"\nprecision = \"f32\"", 1).replacen(
+        "spacing = 0.02",
+        "spacing = 0.02\nneighbor_skin = 0.3",
+        1,
+    );
+    let (p, e) = err("neighbor_skin_on_wgpu", &text);
+    assert_eq!(
+        e,
+        format!(
+            "{}:9: key `sph.neighbor_skin`: the wgpu backend rebuilds its neighbour lists every step: use 0 or backend \"cpu\"",
+            p.display()
+        )
+    );
+}
+case!(
     material_without_name,
     "name = \"sand\"\n",
     "",

@@ -41,6 +41,13 @@ pub enum TimeStep {
     },
 }
 
+/// Default Verlet skin of the neighbour lists (multiple of h; see
+/// [`SolverConfig::neighbor_skin`]).
+pub const DEFAULT_NEIGHBOR_SKIN: f64 = 0.3;
+
+/// Largest Verlet skin accepted, as a multiple of h.
+pub const MAX_NEIGHBOR_SKIN: f64 = 1.0;
+
 /// Below this value of the free-surface indicator λ a particle has almost no neighbours on
 /// some side (λ ≤ 0.3 at the edges and corners of a resting block, 0 for an isolated particle):
 /// it is detached from the soil and carries no stress, whatever the free-surface mode.
@@ -113,6 +120,11 @@ pub struct SolverConfig {
     pub gravity: [f64; 3],
     /// Layers of wall/body BCE markers.
     pub bce_layers: usize,
+    /// Verlet skin of the neighbour lists, as a multiple of h: lists hold pairs within
+    /// 2h + skin and are rebuilt only once some particle or body marker has moved far enough
+    /// that a pair inside 2h could be missing (0: rebuild every step). Backends that do not
+    /// reuse lists rebuild every step, which gives the same pairs.
+    pub neighbor_skin: f64,
 }
 
 impl SolverConfig {
@@ -138,6 +150,7 @@ impl Default for SolverConfig {
             free_surface_stress: FreeSurfaceStress::Keep,
             gravity: [0.0, 0.0, -9.81],
             bce_layers: 3,
+            neighbor_skin: DEFAULT_NEIGHBOR_SKIN,
         }
     }
 }

@@ -9,11 +9,24 @@ use crate::bench::{BenchModel, bench_scene, run_bench, run_wheel_long, wheel_lon
 use crate::input::InputError;
 use crate::scene;
 
+/// The skins to time (`--skin`; the scene default when none are given), each checked.
+fn skins(skin: &[f64]) -> Result<Vec<f64>, Failure> {
+    let max = regolith_fsi::config::MAX_NEIGHBOR_SKIN;
+    if let Some(s) = skin.iter().find(|s| !(s.is_finite() && (0.0..=max).contains(*s))) {
+        return Err(
+            InputError::flag("--skin", format!("each skin must be in [0, {max}] (multiples of h; got {s})")).into()
+        );
+    }
+    Ok(if skin.is_empty() { vec![regolith_fsi::config::DEFAULT_NEIGHBOR_SKIN] } else { skin.to_vec() })
+}
+
+#[allow(clippy::too_many_arguments)]
 pub(super) fn run(
     particles: usize,
     model: BenchModelArg,
     backend: BackendArg,
     precision: Precision,
+    skin: &[f64],
     steps: u64,
     warmup: u64,
     json: Option<&Path>,
@@ -33,9 +46,12 @@ pub(super) fn run(
         BenchModelArg::Mcc => vec![BenchModel::Mcc],
         BenchModelArg::Both => vec![BenchModel::DruckerPrager, BenchModel::Mcc],
     };
+    let skins = skins(skin)?;
+    let explicit_skin = !skin.is_empty();
     let mut results = Vec::new();
-    for m in models {
+    for (m, skin) in models.into_iter().flat_map(|m| skins.iter().map(move |&s| (m, s))) {
         let mut scene = bench_scene(particles, m, prec)?;
+        scene.solver.neighbor_skin = skin;
         scene.backend = match backend {
             BackendArg::Auto => scene::Backend::Auto,
             BackendArg::Cpu => scene::Backend::Cpu,
@@ -45,15 +61,29 @@ pub(super) fn run(
         let chosen =
             crate::build::backend::resolve_backend(&mut scene).map_err(|m| InputError::flag("--backend", m))?;
         eprintln!("{chosen}");
+        if scene.backend == scene::Backend::Wgpu && !explicit_skin {
+            // The wgpu backend rebuilds every step whatever the default.
+            scene.solver.neighbor_skin = 0.0;
+        } else if scene.backend == scene::Backend::Wgpu && skin > 0.0 {
+            return Err(InputError::flag(
+                "--skin",
+                format!(
+                    "the wgpu backend rebuilds its neighbour lists every step: use 0 or --backend cpu (got {skin})"
+                ),
+            )
+            .into());
+        }
         let r = run_bench(&scene, m, warmup, steps).context("bench run failed")?;
         println!(
-            "bench {:<15} {} {}: {} particles, {} markers, {} steps in {:.2} s: {:.3e} particle-steps/s, {:.3e} neighbour interactions/s ({:.1} neighbours/particle, {} threads, adapter {})",
+            "bench {:<15} {} {} skin {} h: {} particles, {} markers, {} steps ({} list builds) in {:.2} s: {:.3e} particle-steps/s, {:.3e} listed pairs/s ({:.1} listed neighbours/particle, {} threads, adapter {})",
             r.model,
             r.backend,
             r.precision,
+            r.neighbor_skin,
             r.particles,
             r.markers,
             r.steps,
+            r.list_builds,
             r.seconds,
             r.particle_steps_per_s,
             r.interactions_per_s,
@@ -74,6 +104,7 @@ pub(super) fn run(
 pub(super) fn wheel_long(
     active: ActiveArg,
     length: f64,
+    skin: &[f64],
     steps: u64,
     warmup: u64,
     json: Option<&Path>,
@@ -86,19 +117,23 @@ pub(super) fn wheel_long(
         ActiveArg::Off => vec![false],
         ActiveArg::Both => vec![false, true],
     };
+    let skins = skins(skin)?;
     let mut results = Vec::new();
-    for on in modes {
-        let scene = wheel_long_scene(length, on)?;
+    for (skin, on) in skins.iter().flat_map(|&s| modes.iter().map(move |&on| (s, on))) {
+        let mut scene = wheel_long_scene(length, on)?;
+        scene.solver.neighbor_skin = skin;
         let r = run_wheel_long(&scene, warmup, steps).context("bench run failed")?;
         println!(
-            "bench wheel-long active {}: {} particles ({:.0} integrated per step), {} markers; {} exchanges, {} steps (dt {:.3e} s) in {:.2} s ({} classifications): {:.3e} simulated s per wall s, {:.3e} particle-steps/s; wheel force x {:.2} N, z {:.2} N ({} threads)",
+            "bench wheel-long active {} skin {} h: {} particles ({:.0} integrated per step), {} markers; {} exchanges, {} steps (dt {:.3e} s, {} list builds) in {:.2} s ({} classifications): {:.3e} simulated s per wall s, {:.3e} particle-steps/s; wheel force x {:.2} N, z {:.2} N ({} threads)",
             if r.active { "on " } else { "off" },
+            r.neighbor_skin,
             r.particles,
             r.awake_mean,
             r.markers,
             r.exchanges,
             r.steps,
             r.dt_mean,
+            r.list_builds,
             r.seconds,
             r.classifications,
             r.sim_s_per_wall_s,
@@ -109,13 +144,20 @@ pub(super) fn wheel_long(
         );
         results.push(r);
     }
-    if let [off, on] = &results[..] {
-        println!(
-            "bench wheel-long: active/full speed-up {:.2}x (simulated s per wall s); wheel force x {:+.2} %, z {:+.2} % against the full bed",
-            on.sim_s_per_wall_s / off.sim_s_per_wall_s,
-            100.0 * (on.force_xz[0] - off.force_xz[0]) / off.force_xz[0].abs(),
-            100.0 * (on.force_xz[1] - off.force_xz[1]) / off.force_xz[1].abs()
-        );
+    // Every run against the first (full bed, first skin).
+    if let [base, rest @ ..] = &results[..] {
+        for r in rest {
+            println!(
+                "bench wheel-long: active {} skin {} h against active {} skin {} h: speed-up {:.2}x (simulated s per wall s); wheel force x {:+.2} %, z {:+.2} %",
+                if r.active { "on" } else { "off" },
+                r.neighbor_skin,
+                if base.active { "on" } else { "off" },
+                base.neighbor_skin,
+                r.sim_s_per_wall_s / base.sim_s_per_wall_s,
+                100.0 * (r.force_xz[0] - base.force_xz[0]) / base.force_xz[0].abs(),
+                100.0 * (r.force_xz[1] - base.force_xz[1]) / base.force_xz[1].abs()
+            );
+        }
     }
     if let Some(p) = json {
         crate::output::write_json(p, &results).context("writing bench json")?;

@@ -224,6 +224,11 @@ pub enum Command {
         /// wheel-long only: bed length (m).
         #[arg(long, value_name = "M")]
         length: Option<f64>,
+        /// Verlet skins of the neighbour lists to time, multiples of h, comma-separated (e.g.
+        /// `0,0.3`: rebuilt every step against reused lists, in one run); default: the scene
+        /// default.
+        #[arg(long, value_name = "S,…", value_delimiter = ',')]
+        skin: Vec<f64>,
         /// Soil particles (about).
         #[arg(long, value_name = "N", default_value_t = 100_000)]
         particles: usize,
@@ -280,10 +285,23 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Check { scene, sets } => check::run(&scene, &sets),
         Command::Bench { carve: true, json, .. } => bench::carve(json.as_deref()),
         Command::Bench {
-            scene: BenchSceneArg::WheelLong, active, length, steps, warmup, json, carve: false, ..
-        } => {
-            bench::wheel_long(active.unwrap_or(ActiveArg::Both), length.unwrap_or(10.0), steps, warmup, json.as_deref())
-        }
+            scene: BenchSceneArg::WheelLong,
+            active,
+            length,
+            steps,
+            warmup,
+            json,
+            skin,
+            carve: false,
+            ..
+        } => bench::wheel_long(
+            active.unwrap_or(ActiveArg::Both),
+            length.unwrap_or(10.0),
+            &skin,
+            steps,
+            warmup,
+            json.as_deref(),
+        ),
         Command::Bench { scene: BenchSceneArg::Block, active, length, .. } if active.is_some() || length.is_some() => {
             Err(InputError::flag(
                 if active.is_some() { "--active" } else { "--length" },
@@ -291,8 +309,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             )
             .into())
         }
-        Command::Bench { particles, model, backend, precision, steps, warmup, json, carve: false, .. } => {
-            bench::run(particles, model, backend, precision, steps, warmup, json.as_deref())
+        Command::Bench { particles, model, backend, precision, steps, warmup, json, skin, carve: false, .. } => {
+            bench::run(particles, model, backend, precision, &skin, steps, warmup, json.as_deref())
         }
         Command::Run { scene, out, backend, precision, sets, slips, quiet } => {
             let mut sets = sets;

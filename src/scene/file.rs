@@ -94,6 +94,7 @@ pub(crate) struct SphFile {
     pub free_surface_threshold: Option<f64>,
     pub free_surface_stress: Option<FreeSurfaceStressName>,
     pub bce_layers: Option<i64>,
+    pub neighbor_skin: Option<f64>,
     pub active: Option<ActiveFile>,
 }
 

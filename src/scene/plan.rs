@@ -58,6 +58,16 @@ pub fn describe(scene: &Scene) -> String {
         sv.h_factor,
         sv.artificial_viscosity
     );
+    let lists = if sv.neighbor_skin > 0.0 {
+        format!(
+            "reused within a Verlet skin of {} h = {:.4} m (the wgpu backend rebuilds every step)",
+            sv.neighbor_skin,
+            sv.neighbor_skin * sv.h()
+        )
+    } else {
+        "rebuilt every step".to_string()
+    };
+    let _ = writeln!(s, "  neighbour lists: {lists}");
     // The effects the solver is specialised for (the wgpu pipeline's constants and modules,
     // the CPU backend's monomorphised loops).
     #[cfg(feature = "wgpu")]

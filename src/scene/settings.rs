@@ -155,6 +155,22 @@ pub(super) fn resolve_settings(
         Some(KernelName::Wendland) => KernelKind::Wendland,
         Some(KernelName::Cubic) => KernelKind::Cubic,
     };
+    let neighbor_skin = sph.neighbor_skin.unwrap_or(d.neighbor_skin);
+    let max_skin = regolith_fsi::config::MAX_NEIGHBOR_SKIN;
+    if !(neighbor_skin.is_finite() && (0.0..=max_skin).contains(&neighbor_skin)) {
+        return Err(e(
+            "sph.neighbor_skin",
+            format!(
+                "must be in [0, {max_skin}] (a multiple of h; 0 rebuilds the lists every step; got {neighbor_skin})"
+            ),
+        ));
+    }
+    if backend == Backend::Wgpu && sph.neighbor_skin.is_some_and(|s| s > 0.0) {
+        return Err(e(
+            "sph.neighbor_skin",
+            "the wgpu backend rebuilds its neighbour lists every step: use 0 or backend \"cpu\"".into(),
+        ));
+    }
     let solver = SolverConfig {
         spacing,
         h_factor,
@@ -169,6 +185,7 @@ pub(super) fn resolve_settings(
         free_surface_stress,
         gravity,
         bce_layers: bce_layers as usize,
+        neighbor_skin,
     };
     let exchange_interval = sim.exchange_interval.unwrap_or(1e-3);
     if !(exchange_interval.is_finite() && exchange_interval > 0.0 && exchange_interval <= end_time) {

@@ -5,8 +5,9 @@
 //! 1. counting-sort the soil particles by cell and permute every array (particles stay in cell
 //!    order, so a neighbour loop reads nearby memory); markers are sorted indirectly so their
 //!    indices stay stable for the coupling layer;
-//! 2. build soil–soil, soil–marker and marker–soil neighbour lists (radius 2h), reused by both
-//!    stages;
+//! 2. build soil–soil, soil–marker and marker–soil neighbour lists (radius 2h + skin), reused
+//!    by both stages and, with a Verlet skin, by later steps while the moves since the build
+//!    cannot have brought an unlisted pair inside 2h (steps 1–2 are then skipped);
 //! 3. stage 1: extrapolate marker velocity and stress, evaluate the soil rates, flag the free
 //!    surface, choose dt;
 //! 4. midpoint: advance to t + dt/2 (plastic correction), evaluate again (with marker forces),
@@ -139,6 +140,24 @@ pub struct CpuSph<T: Real> {
     near: usize,
     ext_sort: CellSort,
     classifications: u64,
+    // Verlet lists (see `lists_still_hold`).
+    /// Skin length (m); 0 rebuilds every step.
+    skin: f64,
+    /// The lists were built for the current particle order and marker set.
+    lists_valid: bool,
+    /// Whether the lists were built with the active region kept.
+    lists_partitioned: bool,
+    /// Awake positions at the last build (soil order).
+    x_ref: Vec<Vec3<T>>,
+    /// Body-marker positions at the last build (order of `body_ids`), and whether each was
+    /// inside the grid.
+    bm_ref: Vec<Vec3<T>>,
+    bm_inside: Vec<bool>,
+    /// Largest body-marker displacement since the last build (m).
+    bm_moved: f64,
+    /// Largest move from a step's start to its midpoint stage, last step (m).
+    stage_motion: f64,
+    list_builds: u64,
 }
 
 /// Calls a rate function instantiated for the effects that are on: each combination is its
@@ -187,6 +206,13 @@ impl<T: Real> CpuSph<T> {
         }
         if particles.len() >= u32::MAX as usize || markers.len() >= u32::MAX as usize {
             return Err(SolverError::Setup("too many particles".into()));
+        }
+        if !(cfg.neighbor_skin.is_finite() && (0.0..=crate::config::MAX_NEIGHBOR_SKIN).contains(&cfg.neighbor_skin)) {
+            return Err(SolverError::Setup(format!(
+                "neighbour skin {} h is outside [0, {}] h",
+                cfg.neighbor_skin,
+                crate::config::MAX_NEIGHBOR_SKIN
+            )));
         }
         let h = cfg.h();
         let grid = GridSpec::covering(domain.0, domain.1, h);
@@ -274,6 +300,15 @@ impl<T: Real> CpuSph<T> {
             near: n,
             ext_sort: CellSort::default(),
             classifications: 0,
+            skin: cfg.neighbor_skin * h,
+            lists_valid: false,
+            lists_partitioned: false,
+            x_ref: Vec::new(),
+            bm_ref: Vec::new(),
+            bm_inside: Vec::new(),
+            bm_moved: 0.0,
+            stage_motion: 0.0,
+            list_builds: 0,
         })
     }
 
@@ -322,6 +357,10 @@ impl<T: Real> CpuSph<T> {
     pub fn classifications(&self) -> u64 {
         self.classifications
     }
+    /// Neighbour-list builds so far (one per step without a Verlet skin).
+    pub fn list_builds(&self) -> u64 {
+        self.list_builds
+    }
     /// Keeps an active region from now on (`None`: the whole domain is awake). `domain.boxes`
     /// has one box per FSI body, in marker-owner order (owner `k + 1` is box `k`).
     pub fn set_active_domain(&mut self, domain: Option<ActiveDomain>) -> Result<(), SolverError> {
@@ -340,6 +379,7 @@ impl<T: Real> CpuSph<T> {
         self.domain = domain;
         self.boxes_now.clear();
         self.boxes_classified = None;
+        self.lists_valid = false;
         Ok(())
     }
     /// Places the active-region boxes from the bodies' states (owner order).
@@ -591,7 +631,75 @@ impl<T: Real> CpuSph<T> {
         self.classifications += 1;
     }
 
-    fn sort_and_search(&mut self) {
+    /// Sorts and builds the neighbour lists, or keeps the last ones when they still hold
+    /// every pair within 2h (see [`CpuSph::lists_still_hold`]); `force` always rebuilds.
+    /// Returns whether it rebuilt.
+    fn sort_and_search(&mut self, force: bool) -> bool {
+        if !force && self.lists_still_hold() {
+            if self.markers_dirty {
+                // Same sorted marker set and order; new kinematics.
+                let mo = &self.ms_orig;
+                for (k, &o) in mo.iter().enumerate() {
+                    self.ms_pos[k] = self.m_pos[o as usize];
+                    self.ms_vel[k] = self.m_vel[o as usize];
+                    self.ms_acc[k] = self.m_acc[o as usize];
+                }
+                self.markers_dirty = false;
+            }
+            return false;
+        }
+        self.build_lists();
+        true
+    }
+
+    /// True when the lists of the last build still list every pair closer than 2h at this
+    /// step's two stages, so that reusing them gives exactly the pairs a rebuild would. A pair
+    /// closer than 2h now was closer than 2h + D_a + D_b at the build, D being how far each
+    /// point has moved since; it is listed if D_a + D_b ≤ skin. Soil moves within a step (the
+    /// midpoint stage is checked again in [`CpuSph::step`]); markers only between steps. Also
+    /// false when the particle order must change: a particle left the grid, an awake one left
+    /// the cells it may occupy, the active region needs a new classification or was switched
+    /// on or off, or fixed walls moved.
+    fn lists_still_hold(&mut self) -> bool {
+        if self.skin <= 0.0 || !self.lists_valid || !self.walls_sorted {
+            return false;
+        }
+        let partitioned = self.partitioned();
+        if partitioned != self.lists_partitioned || (partitioned && self.needs_classification()) {
+            return false;
+        }
+        let n = self.awake;
+        if self.x_ref.len() != n {
+            return false;
+        }
+        let (idx, cells) = (&self.idx, &self.awake_cells);
+        let moved = self.pos[..n]
+            .par_iter()
+            .zip(self.x_ref.par_iter())
+            .map(|(p, r)| match idx.coords(*p) {
+                Some(c) if !partitioned || cells.get(idx.linear(c)) == Some(&true) => (*p - *r).norm().as_f64(),
+                _ => f64::INFINITY,
+            })
+            .reduce(|| 0.0, f64::max);
+        if self.markers_dirty {
+            let (m_pos, grid_idx) = (&self.m_pos, &self.idx);
+            let bm = self
+                .body_ids
+                .par_iter()
+                .zip(self.bm_ref.par_iter().zip(self.bm_inside.par_iter()))
+                .map(|(&o, (r, &inside))| {
+                    let p = m_pos[o as usize];
+                    if grid_idx.coords(p).is_some() == inside { (p - *r).norm().as_f64() } else { f64::INFINITY }
+                })
+                .reduce(|| 0.0, f64::max);
+            self.bm_moved = bm;
+        }
+        // The midpoint stage will have moved about as far as last step's did.
+        let soil = moved + 1.5 * self.stage_motion;
+        within_skin(soil, self.bm_moved, self.skin)
+    }
+
+    fn build_lists(&mut self) {
         if self.partitioned() {
             if self.needs_classification() {
                 self.classify();
@@ -640,7 +748,7 @@ impl<T: Real> CpuSph<T> {
             self.markers_dirty = false;
         }
 
-        let radius = T::of(2.0 * self.cfg.h());
+        let radius = T::of(2.0 * self.cfg.h() + self.skin);
         let (awake, near) = (&self.pos[..self.awake], &self.pos[..self.near]);
         let mut groups = vec![TargetGroup { sort: &self.soil_sort, targets: awake, offset: 0 }];
         if self.near > self.awake {
@@ -663,6 +771,19 @@ impl<T: Real> CpuSph<T> {
         self.nl_ms.transpose_compact(&mut self.nl_sm, self.ms_pos.len(), &mut self.touched);
         self.m_packed.resize(self.touched.len(), Packed::default());
         self.ms_force.resize(self.touched.len(), Vec3::zero());
+        // References for the reuse test.
+        self.list_builds += 1;
+        self.lists_partitioned = self.partitioned();
+        if self.skin > 0.0 {
+            self.x_ref.clear();
+            self.x_ref.extend_from_slice(&self.pos[..self.awake]);
+            self.bm_ref.clear();
+            self.bm_ref.extend(self.body_ids.iter().map(|&o| self.m_pos[o as usize]));
+            self.bm_inside.clear();
+            self.bm_inside.extend(self.bm_ref.iter().map(|p| self.idx.coords(*p).is_some()));
+            self.bm_moved = 0.0;
+            self.lists_valid = true;
+        }
     }
 
     fn evaluate(&mut self, from_stage: bool, with_forces: bool) {
@@ -760,36 +881,56 @@ impl<T: Real> CpuSph<T> {
     /// Advances by one step of the configured (fixed or adaptive) size, at most `max_dt` when
     /// given (to land exactly on an output or end time).
     pub fn step(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
-        self.sort_and_search();
         let rk2 = self.cfg.integrator == Integrator::Rk2;
-        self.evaluate(false, !rk2);
-        let n = self.awake;
-        {
-            // A particle with wall or body markers in its support is in contact, not free: it
-            // keeps its stress, so that it resists penetration and carries basal friction.
-            let th = T::of(self.cfg.free_surface_threshold.unwrap_or(0.0));
-            let detach = T::of(DETACHED_THRESHOLD);
-            let nl_sm = &self.nl_sm;
-            let rates = &self.rates[..n];
-            self.free_surface[..n].par_iter_mut().zip(self.detached[..n].par_iter_mut()).enumerate().for_each(
-                |(i, (f, d))| {
-                    let free = nl_sm.of(i).is_empty();
-                    *f = free && rates[i].fs < th;
-                    *d = free && rates[i].fs < detach;
-                },
-            );
-        }
-        let dt = self.choose_dt(max_dt);
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(SolverError::Setup(format!("time step {dt} s is not positive")));
-        }
-        if rk2 {
+        let mut force = false;
+        let dt = loop {
+            let rebuilt = self.sort_and_search(force);
+            self.evaluate(false, !rk2);
+            let n = self.awake;
+            {
+                // A particle with wall or body markers in its support is in contact, not free:
+                // it keeps its stress, so that it resists penetration and carries basal
+                // friction.
+                let th = T::of(self.cfg.free_surface_threshold.unwrap_or(0.0));
+                let detach = T::of(DETACHED_THRESHOLD);
+                let rates = &self.rates[..n];
+                self.free_surface[..n].par_iter_mut().zip(self.detached[..n].par_iter_mut()).enumerate().for_each(
+                    |(i, (f, d))| {
+                        let free = !rates[i].contact;
+                        *f = free && rates[i].fs < th;
+                        *d = free && rates[i].fs < detach;
+                    },
+                );
+            }
+            let dt = self.choose_dt(max_dt);
+            if !(dt.is_finite() && dt > 0.0) {
+                return Err(SolverError::Setup(format!("time step {dt} s is not positive")));
+            }
+            if !rk2 {
+                break dt;
+            }
             self.advance(dt, 0.5 * dt, true)?;
+            if self.skin > 0.0 {
+                // The midpoint positions must be covered too. Stage 1 wrote no state, so the
+                // step is simply made again from fresh lists when they are not; fresh lists
+                // are kept whatever the midpoint's move, as without a skin.
+                let (pos, s_pos, x_ref) = (&self.pos[..n], &self.s_pos[..n], &self.x_ref[..n]);
+                let (moved, stage) = s_pos
+                    .par_iter()
+                    .zip(x_ref.par_iter().zip(pos.par_iter()))
+                    .map(|(s, (r, p))| ((*s - *r).norm().as_f64(), (*s - *p).norm().as_f64()))
+                    .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)));
+                self.stage_motion = stage;
+                if !rebuilt && !within_skin(moved, self.bm_moved, self.skin) {
+                    force = true;
+                    continue;
+                }
+            }
             self.evaluate(true, true);
-            self.advance(dt, dt, false)?;
-        } else {
-            self.advance(dt, dt, false)?;
-        }
+            break dt;
+        };
+        self.advance(dt, dt, false)?;
+        let n = self.awake;
         // Marker forces back to original order; impulse on the soil from the markers.
         let mut total = [0.0; 3];
         for f in self.m_force.iter_mut() {
@@ -913,6 +1054,14 @@ impl<T: Real> CpuSph<T> {
                 })
         }
     }
+}
+
+/// Whether lists built with `skin` still hold every pair within the support after the soil
+/// moved at most `soil` and the body markers at most `markers` (m) since their build: a
+/// soil–soil pair needs `2 soil ≤ skin`, a soil–marker pair `soil + markers ≤ skin`. A part in
+/// a thousand of the skin is kept back for round-off in the distance tests.
+fn within_skin(soil: f64, markers: f64, skin: f64) -> bool {
+    soil + soil.max(markers) <= 0.999 * skin
 }
 
 /// The role of each particle (see [`crate::active`]): awake inside a box grown by the travel

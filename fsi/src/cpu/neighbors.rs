@@ -1,7 +1,9 @@
 //! Neighbour lists in compressed-row form, built from a cell grid.
 //!
-//! Built once per step and reused by both stages of the midpoint integrator: particles move a
-//! fraction of h per step, and a pair that drifts out of the support just gets `W = 0`.
+//! Built with the search radius 2h + skin and reused by both stages of the midpoint
+//! integrator and, with a Verlet skin, by later steps until the moves since the build could
+//! bring an unlisted pair inside 2h (`CpuSph::lists_still_hold`); a listed pair outside the
+//! support just gets `W = 0`.
 
 use rayon::prelude::*;
 

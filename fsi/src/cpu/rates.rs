@@ -47,6 +47,8 @@ pub(crate) struct Rate<T> {
     /// (Marrone et al. 2010), 1 inside the soil, about 0.5 in a flat top layer, lower at edges
     /// and for isolated particles.
     pub fs: T,
+    /// Some wall or body marker lies within the support (set with `fs`).
+    pub contact: bool,
     /// Moduli the stress rate used.
     pub moduli: Moduli<T>,
 }
@@ -215,64 +217,86 @@ pub(crate) fn soil_rates<
     out.par_iter_mut().enumerate().for_each(|(a, out)| {
         let pa = &soil[a];
         out.moduli = moduli[a];
-        let mut drho = T::zero();
-        let mut acc = Vec3::zero();
-        let mut l = Mat3::zero();
-        let mut xs = Vec3::zero();
-        let mut gc = Vec3::zero();
-        let mut fs = Sym3::zero();
-        let mut visit = |pb: &Packed<T>, is_soil: bool| {
-            let r = pa.x - pb.x;
-            let r2 = r.norm2();
-            if r2 >= c.support2 {
-                return;
-            }
-            let rr = r2.sqrt();
-            let f = K::grad_factor(rr, c.inv_h, c.alpha);
-            let gw = r * f;
-            let vab = pa.v - pb.v;
-            drho += pb.vol * vab.dot(gw);
-            acc += pair_term::<T, VISC>(c, pa, pb, r, r2, gw, vab) * pb.mass;
-            // L_ij = Σ V_b (v_b − v_a)_i ∂_j W
-            let mv = vab * (-pb.vol);
-            for i in 0..3 {
-                let vi = mv.get(i);
-                l.m[i][0] += vi * gw.x;
-                l.m[i][1] += vi * gw.y;
-                l.m[i][2] += vi * gw.z;
-            }
-            if FS {
-                // (x_b − x_a) ⊗ ∇W = −F r ⊗ r: symmetric for a radial kernel.
-                let k = -pb.vol * f;
-                fs +=
-                    Sym3::new(k * r.x * r.x, k * r.y * r.y, k * r.z * r.z, k * r.x * r.y, k * r.x * r.z, k * r.y * r.z);
-            }
-            if XSPH && is_soil {
-                let w = K::w(rr, c.inv_h, c.alpha);
-                xs -= vab * (T::of(2.0) * pb.mass / (pa.rho + pb.rho) * w);
-            }
-            if PPST {
-                gc += gw * pb.vol;
-            }
-        };
+        // Sums in locals, each neighbour kind in its own inlined loop: the compiler keeps the
+        // accumulators out of memory instead of calling a closure per pair.
+        let mut sums = PairSums::default();
         for &b in nl_ss.of(a) {
-            visit(&soil[b as usize], true);
+            sums.add::<K, VISC, XSPH, PPST, FS, true>(c, pa, &soil[b as usize]);
         }
         for &w in nl_sm.of(a) {
-            visit(&markers[w as usize], false);
+            sums.add::<K, VISC, XSPH, PPST, FS, false>(c, pa, &markers[w as usize]);
         }
-        let d = l.sym();
-        let spin = l.skew();
-        out.drho = drho * pa.rho;
-        out.acc = acc + c.gravity;
+        let d = sums.l.sym();
+        let spin = sums.l.skew();
+        out.drho = sums.drho * pa.rho;
+        out.acc = sums.acc + c.gravity;
         out.d = d;
         out.dsigma = jaumann_rate(&sigma[a], &d, spin, out.moduli);
-        out.xsph = xs;
-        out.grad_c = gc;
+        out.xsph = sums.xs;
+        out.grad_c = sums.gc;
         if FS {
-            out.fs = fs.min_eigenvalue();
+            out.fs = sums.fs.min_eigenvalue();
+            out.contact = sums.contact;
         }
     });
+}
+
+/// What one soil particle's neighbours add up to (see [`soil_rates`]).
+#[derive(Clone, Copy, Default)]
+struct PairSums<T> {
+    drho: T,
+    acc: Vec3<T>,
+    /// Velocity gradient L.
+    l: Mat3<T>,
+    xs: Vec3<T>,
+    gc: Vec3<T>,
+    fs: Sym3<T>,
+    contact: bool,
+}
+
+impl<T: Real> PairSums<T> {
+    /// Adds neighbour `pb` (a soil particle with `SOIL`, else a marker) of `pa`; nothing when
+    /// it is outside the support.
+    #[inline(always)]
+    fn add<K: Kernel<T>, const VISC: bool, const XSPH: bool, const PPST: bool, const FS: bool, const SOIL: bool>(
+        &mut self,
+        c: &PairConsts<T>,
+        pa: &Packed<T>,
+        pb: &Packed<T>,
+    ) {
+        let r = pa.x - pb.x;
+        let r2 = r.norm2();
+        if r2 >= c.support2 {
+            return;
+        }
+        let rr = r2.sqrt();
+        let f = K::grad_factor(rr, c.inv_h, c.alpha);
+        let gw = r * f;
+        let vab = pa.v - pb.v;
+        self.drho += pb.vol * vab.dot(gw);
+        self.acc += pair_term::<T, VISC>(c, pa, pb, r, r2, gw, vab) * pb.mass;
+        // L_ij = Σ V_b (v_b − v_a)_i ∂_j W
+        let mv = vab * (-pb.vol);
+        for (row, vi) in self.l.m.iter_mut().zip([mv.x, mv.y, mv.z]) {
+            row[0] += vi * gw.x;
+            row[1] += vi * gw.y;
+            row[2] += vi * gw.z;
+        }
+        if FS {
+            self.contact |= !SOIL;
+            // (x_b − x_a) ⊗ ∇W = −F r ⊗ r: symmetric for a radial kernel.
+            let k = -pb.vol * f;
+            self.fs +=
+                Sym3::new(k * r.x * r.x, k * r.y * r.y, k * r.z * r.z, k * r.x * r.y, k * r.x * r.z, k * r.y * r.z);
+        }
+        if XSPH && SOIL {
+            let w = K::w(rr, c.inv_h, c.alpha);
+            self.xs -= vab * (T::of(2.0) * pb.mass / (pa.rho + pb.rho) * w);
+        }
+        if PPST {
+            self.gc += gw * pb.vol;
+        }
+    }
 }
 
 /// Force (N) on each touched marker (row `k` of `nl_ms`, record `markers[k]`) from the soil:
