@@ -95,7 +95,7 @@ fn sleeping_soil_keeps_its_state_bit_for_bit_and_wakes_without_a_jump() {
     // its stress changes about as much as the awake soil's own does over one exchange (the
     // bed's jitter, 2–3e-2 ρgH here), and it moves slower than the sleep speed. Both figures
     // are maxima over noisy samples: round-off alone moves them (1.9e-2 vs 2.8e-2 rebuilding
-    // the lists every step, 2.5e-2 vs 2.2e-2 with the default skin), so the bound is twice
+    // the lists every step, 2.5e-2 vs 2.2e-2 with a 0.3 h Verlet skin), so the bound is twice
     // the jitter; waking with a wrong state (zero, or another particle's) changes it by the order
     // of the stress itself, 0.1–1 ρgH.
     assert!(

@@ -79,6 +79,7 @@ pub struct StepReport {
     pub active: usize,
     /// Soil particles integrated this step (all of `active` unless an active region is kept).
     pub awake: usize,
-    /// Soil–soil and soil–marker pairs visited per rate evaluation.
+    /// Soil–soil and soil–marker pairs listed per rate evaluation (within 2h + the Verlet skin
+    /// on the CPU backend; those outside the support are skipped).
     pub pairs: usize,
 }

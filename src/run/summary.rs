@@ -72,7 +72,8 @@ pub struct Summary {
     pub wall_time_s: f64,
     /// Soil particles × steps per wall-clock second.
     pub particle_steps_per_s: f64,
-    /// Mean neighbour pairs per rate evaluation.
+    /// Mean listed neighbour pairs per rate evaluation (within 2h + the Verlet skin, so more
+    /// than the pairs inside the support when `sph.neighbor_skin > 0`).
     pub neighbour_pairs: f64,
     /// Smallest and largest step (s).
     pub dt_min: f64,
