@@ -47,7 +47,6 @@ pub(super) fn run(
         BenchModelArg::Both => vec![BenchModel::DruckerPrager, BenchModel::Mcc],
     };
     let skins = skins(skin)?;
-    let explicit_skin = !skin.is_empty();
     let mut results = Vec::new();
     for (m, skin) in models.into_iter().flat_map(|m| skins.iter().map(move |&s| (m, s))) {
         let mut scene = bench_scene(particles, m, prec)?;
@@ -61,10 +60,7 @@ pub(super) fn run(
         let chosen =
             crate::build::backend::resolve_backend(&mut scene).map_err(|m| InputError::flag("--backend", m))?;
         eprintln!("{chosen}");
-        if scene.backend == scene::Backend::Wgpu && !explicit_skin {
-            // The wgpu backend rebuilds every step whatever the default.
-            scene.solver.neighbor_skin = 0.0;
-        } else if scene.backend == scene::Backend::Wgpu && skin > 0.0 {
+        if scene.backend == scene::Backend::Wgpu && skin > 0.0 {
             return Err(InputError::flag(
                 "--skin",
                 format!(

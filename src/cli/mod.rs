@@ -283,6 +283,9 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             })
         }
         Command::Check { scene, sets } => check::run(&scene, &sets),
+        Command::Bench { carve: true, skin, .. } if !skin.is_empty() => {
+            Err(InputError::flag("--skin", "does not apply to --carve".to_string()).into())
+        }
         Command::Bench { carve: true, json, .. } => bench::carve(json.as_deref()),
         Command::Bench {
             scene: BenchSceneArg::WheelLong,

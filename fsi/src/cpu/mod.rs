@@ -638,18 +638,24 @@ impl<T: Real> CpuSph<T> {
         if !force && self.lists_still_hold() {
             if self.markers_dirty {
                 // Same sorted marker set and order; new kinematics.
-                let mo = &self.ms_orig;
-                for (k, &o) in mo.iter().enumerate() {
-                    self.ms_pos[k] = self.m_pos[o as usize];
-                    self.ms_vel[k] = self.m_vel[o as usize];
-                    self.ms_acc[k] = self.m_acc[o as usize];
-                }
-                self.markers_dirty = false;
+                self.gather_markers();
             }
             return false;
         }
         self.build_lists();
         true
+    }
+
+    /// Copies the markers' kinematics into sorted order (`ms_orig`).
+    fn gather_markers(&mut self) {
+        let mo = &self.ms_orig;
+        self.ms_pos.clear();
+        self.ms_pos.extend(mo.iter().map(|&o| self.m_pos[o as usize]));
+        self.ms_vel.clear();
+        self.ms_vel.extend(mo.iter().map(|&o| self.m_vel[o as usize]));
+        self.ms_acc.clear();
+        self.ms_acc.extend(mo.iter().map(|&o| self.m_acc[o as usize]));
+        self.markers_dirty = false;
     }
 
     /// True when the lists of the last build still list every pair closer than 2h at this
@@ -738,14 +744,7 @@ impl<T: Real> CpuSph<T> {
             let inside = self.body_sort.inside();
             self.ms_orig.truncate(self.n_wall_sorted);
             self.ms_orig.extend(self.body_sort.order[..inside].iter().map(|&k| self.body_ids[k as usize]));
-            let mo = &self.ms_orig;
-            self.ms_pos.clear();
-            self.ms_pos.extend(mo.iter().map(|&o| self.m_pos[o as usize]));
-            self.ms_vel.clear();
-            self.ms_vel.extend(mo.iter().map(|&o| self.m_vel[o as usize]));
-            self.ms_acc.clear();
-            self.ms_acc.extend(mo.iter().map(|&o| self.m_acc[o as usize]));
-            self.markers_dirty = false;
+            self.gather_markers();
         }
 
         let radius = T::of(2.0 * self.cfg.h() + self.skin);
