@@ -23,16 +23,24 @@ use crate::build::{BuildError, SurfaceGrid, assemble};
 use crate::scene::{Scene, load_scene};
 
 /// A body of a [`Simulation`]: got from [`Simulation::body`] or [`Simulation::bodies`], so it
-/// always names one of the scene's bodies.
+/// always names one of the scene's bodies. It remembers which simulation it came from: using
+/// it on another one is a programming error and panics with a message saying so (rather than
+/// reading some other body, or past the end).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct Body(pub(crate) usize);
+pub struct Body {
+    sim: u64,
+    index: usize,
+}
 
 impl Body {
     /// Position in the scene's `[[bodies]]` (vehicle links follow them).
     pub fn index(self) -> usize {
-        self.0
+        self.index
     }
 }
+
+/// Source of each simulation's identity, for its [`Body`] handles.
+static NEXT_SIMULATION: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 /// A scene being simulated: soil, bodies and their coupling.
 pub struct Simulation<T: Real> {
@@ -48,6 +56,8 @@ pub struct Simulation<T: Real> {
     vehicle_joints: Vec<Vec<Option<JointId>>>,
     /// Initial soil surface, for sinkage.
     surface0: SurfaceGrid,
+    /// Identity carried by this simulation's [`Body`] handles.
+    uid: u64,
 }
 
 /// A wheel's state: slip, sinkage and speed.
@@ -80,6 +90,7 @@ impl<T: Real> Simulation<T> {
             fsi: a.fsi,
             vehicle_joints: a.vehicle_joints,
             surface0: a.surface0,
+            uid: NEXT_SIMULATION.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         };
         sim.apply_drives();
         Ok(sim)
@@ -92,33 +103,51 @@ impl<T: Real> Simulation<T> {
 
     /// A body by name.
     pub fn body(&self, name: &str) -> Option<Body> {
-        self.scene.bodies.iter().position(|b| b.desc.name == name).map(Body)
+        self.scene.bodies.iter().position(|b| b.desc.name == name).map(|i| self.body_at(i))
     }
 
     /// Every body, in scene order.
     pub fn bodies(&self) -> impl Iterator<Item = Body> + use<T> {
-        (0..self.scene.bodies.len()).map(Body)
+        let sim = self.uid;
+        (0..self.scene.bodies.len()).map(move |index| Body { sim, index })
+    }
+
+    /// The body at a position of the scene's body list (bodies, then vehicle links), for the
+    /// crate's rigs and outputs, which hold scene indices.
+    pub(crate) fn body_at(&self, index: usize) -> Body {
+        debug_assert!(index < self.scene.bodies.len());
+        Body { sim: self.uid, index }
+    }
+
+    /// A handle's index, checked to belong to this simulation.
+    fn slot(&self, b: Body) -> usize {
+        assert!(
+            b.sim == self.uid,
+            "Body handle of another Simulation used (body index {}): get handles from this simulation's body() or bodies()",
+            b.index
+        );
+        b.index
     }
 
     /// Its rapier-side id.
     pub fn rigid_id(&self, b: Body) -> BodyId {
-        self.ids[b.0]
+        self.ids[self.slot(b)]
     }
 
     /// State (world frame, centre-of-mass velocities).
     pub fn body_state(&self, b: Body) -> BodyState {
-        self.system.rigid.state(self.ids[b.0])
+        self.system.rigid.state(self.ids[self.slot(b)])
     }
 
     /// Mean soil force and torque (about the centre of mass) on a body over the last exchange
     /// interval; zero for bodies without markers.
     pub fn fsi_wrench(&self, b: Body) -> Wrench {
-        self.fsi[b.0].map(|k| self.system.wrench(k)).unwrap_or_default()
+        self.fsi[self.slot(b)].map(|k| self.system.wrench(k)).unwrap_or_default()
     }
 
     /// Sets a prescribed body's velocity (m/s, rad/s) from the next step on.
     pub fn set_body_velocity(&mut self, b: Body, linvel: [f64; 3], angvel: [f64; 3]) {
-        self.system.rigid.set_prescribed_velocity(self.ids[b.0], linvel, angvel);
+        self.system.rigid.set_prescribed_velocity(self.ids[self.slot(b)], linvel, angvel);
     }
 
     /// Adds a joint (world-frame anchor and axis).
@@ -220,7 +249,7 @@ impl<T: Real> Simulation<T> {
     /// in the order of its `wheels`.
     pub fn wheel_states(&self, v: usize) -> Vec<WheelState> {
         let spec = &self.scene.vehicles[v];
-        let chassis = self.body_state(Body(spec.body(spec.model.root)));
+        let chassis = self.body_state(self.body_at(spec.body(spec.model.root)));
         let left = regolith_rigid::quat_rotate(chassis.rotation, [0.0, 1.0, 0.0]);
         // Heading: the root's x projected on the horizontal plane.
         let fwd = regolith_rigid::quat_rotate(chassis.rotation, [1.0, 0.0, 0.0]);
@@ -229,7 +258,7 @@ impl<T: Real> Simulation<T> {
         spec.wheels
             .iter()
             .map(|w| {
-                let st = self.body_state(Body(spec.body(w.link)));
+                let st = self.body_state(self.body_at(spec.body(w.link)));
                 let j = &spec.model.joints[w.joint];
                 let axle = regolith_rigid::quat_rotate(st.rotation, j.axis);
                 let rel = [0, 1, 2].map(|k| st.angvel[k] - chassis.angvel[k]);

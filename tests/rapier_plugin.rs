@@ -43,3 +43,17 @@ fn plugin_over_a_plain_rapier_world_matches_the_scene_file() {
     // only in the f32 rounding of the step length and of the accelerations fed to the markers.
     assert!(worst < 1e-6, "paths differ by {worst:e} m");
 }
+
+/// A body handle is tied to the simulation that gave it: used on another one (even of the same
+/// scene, where the index would be in range) it panics with a message naming the mistake
+/// instead of reading that simulation's body.
+#[test]
+#[should_panic(expected = "Body handle of another Simulation")]
+fn a_body_handle_from_another_simulation_is_refused() {
+    let scene = common::example("rapier_plugin_equivalent.toml", &[]);
+    let a = Simulation::<f64>::new(&scene).expect("scene builds");
+    let b = Simulation::<f64>::new(&scene).expect("scene builds");
+    let sphere_of_a = a.body("sphere").expect("sphere");
+    assert_eq!(a.body_state(sphere_of_a).origin, b.body_state(b.body("sphere").expect("sphere")).origin);
+    let _ = b.body_state(sphere_of_a);
+}

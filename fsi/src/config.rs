@@ -43,7 +43,7 @@ pub enum TimeStep {
 
 /// Default Verlet skin of the neighbour lists (multiple of h; see
 /// [`SolverConfig::neighbor_skin`]).
-pub const DEFAULT_NEIGHBOR_SKIN: f64 = 0.0;
+pub const DEFAULT_NEIGHBOR_SKIN: f64 = 0.3;
 
 /// Largest Verlet skin accepted, as a multiple of h.
 pub const MAX_NEIGHBOR_SKIN: f64 = 1.0;

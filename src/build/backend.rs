@@ -134,7 +134,14 @@ pub fn resolve_backend(scene: &mut crate::scene::Scene) -> Result<String, String
             Some(d) if !f64_asked => {
                 scene.backend = Backend::Wgpu;
                 scene.precision = Precision::F32;
-                Ok(format!("backend auto: wgpu on {} (f32)", d.name))
+                let lists = if scene.solver.neighbor_skin > 0.0 {
+                    // The wgpu backend has no Verlet lists; the same pairs come from a rebuild.
+                    scene.solver.neighbor_skin = 0.0;
+                    "; neighbour lists rebuilt every step, sph.neighbor_skin applies to the cpu backend"
+                } else {
+                    ""
+                };
+                Ok(format!("backend auto: wgpu on {} (f32{lists})", d.name))
             }
             Some(_) => {
                 scene.backend = Backend::Cpu;
@@ -151,6 +158,9 @@ pub fn resolve_backend(scene: &mut crate::scene::Scene) -> Result<String, String
             }
             let d = device().map_err(|e| format!("wgpu: {e}"))?;
             scene.precision = Precision::F32;
+            // A scene that asks for a skin on wgpu was refused when read; what is left here is
+            // the default, which on wgpu is a rebuild every step.
+            scene.solver.neighbor_skin = 0.0;
             Ok(format!("backend: wgpu on {} (f32)", d.name))
         }
     }

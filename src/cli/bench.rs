@@ -9,15 +9,15 @@ use crate::bench::{BenchModel, bench_scene, run_bench, run_wheel_long, wheel_lon
 use crate::input::InputError;
 use crate::scene;
 
-/// The skins to time (`--skin`; the scene default when none are given), each checked.
-fn skins(skin: &[f64]) -> Result<Vec<f64>, Failure> {
+/// The skins to time (`--skin`, each checked; `None`: the scene's default, none given).
+fn skins(skin: &[f64]) -> Result<Vec<Option<f64>>, Failure> {
     let max = regolith_fsi::config::MAX_NEIGHBOR_SKIN;
     if let Some(s) = skin.iter().find(|s| !(s.is_finite() && (0.0..=max).contains(*s))) {
         return Err(
             InputError::flag("--skin", format!("each skin must be in [0, {max}] (multiples of h; got {s})")).into()
         );
     }
-    Ok(if skin.is_empty() { vec![regolith_fsi::config::DEFAULT_NEIGHBOR_SKIN] } else { skin.to_vec() })
+    Ok(if skin.is_empty() { vec![None] } else { skin.iter().copied().map(Some).collect() })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -50,7 +50,9 @@ pub(super) fn run(
     let mut results = Vec::new();
     for (m, skin) in models.into_iter().flat_map(|m| skins.iter().map(move |&s| (m, s))) {
         let mut scene = bench_scene(particles, m, prec)?;
-        scene.solver.neighbor_skin = skin;
+        if let Some(s) = skin {
+            scene.solver.neighbor_skin = s;
+        }
         scene.backend = match backend {
             BackendArg::Auto => scene::Backend::Auto,
             BackendArg::Cpu => scene::Backend::Cpu,
@@ -60,7 +62,7 @@ pub(super) fn run(
         let chosen =
             crate::build::backend::resolve_backend(&mut scene).map_err(|m| InputError::flag("--backend", m))?;
         eprintln!("{chosen}");
-        if scene.backend == scene::Backend::Wgpu && skin > 0.0 {
+        if let Some(skin) = skin.filter(|s| *s > 0.0 && scene.backend == scene::Backend::Wgpu) {
             return Err(InputError::flag(
                 "--skin",
                 format!(
@@ -117,7 +119,9 @@ pub(super) fn wheel_long(
     let mut results = Vec::new();
     for (skin, on) in skins.iter().flat_map(|&s| modes.iter().map(move |&on| (s, on))) {
         let mut scene = wheel_long_scene(length, on)?;
-        scene.solver.neighbor_skin = skin;
+        if let Some(s) = skin {
+            scene.solver.neighbor_skin = s;
+        }
         let r = run_wheel_long(&scene, warmup, steps).context("bench run failed")?;
         println!(
             "bench wheel-long active {} skin {} h: {} particles ({:.0} integrated per step), {} markers; {} exchanges, {} steps (dt {:.3e} s, {} list builds) in {:.2} s ({} classifications): {:.3e} simulated s per wall s, {:.3e} particle-steps/s; wheel force x {:.2} N, z {:.2} N ({} threads)",

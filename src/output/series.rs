@@ -13,7 +13,7 @@ use regolith_fsi::Real;
 
 use crate::driver::{Observer, RunError, RunStats};
 use crate::scene::VehicleSpec;
-use crate::sim::{Body, Simulation};
+use crate::sim::Simulation;
 
 /// Rows of a time series.
 #[derive(Clone, Debug, Default)]
@@ -51,7 +51,7 @@ pub fn vehicle_columns(v: &VehicleSpec) -> Vec<String> {
 /// The values of [`vehicle_columns`] for vehicle `vi` now.
 pub fn vehicle_values<T: Real>(sim: &Simulation<T>, vi: usize) -> Vec<f64> {
     let v = &sim.scene.vehicles[vi];
-    let st = sim.body_state(Body(v.body(v.model.root)));
+    let st = sim.body_state(sim.body_at(v.body(v.model.root)));
     let mut row = st.origin.to_vec();
     row.extend(roll_pitch_yaw_deg(st.rotation));
     row.push(st.linvel[0].hypot(st.linvel[1]));
@@ -97,8 +97,8 @@ impl Series {
             row.push(r);
         }
         for i in 0..sim.scene.bodies.len() {
-            let w = sim.fsi_wrench(Body(i));
-            let s = sim.body_state(Body(i));
+            let w = sim.fsi_wrench(sim.body_at(i));
+            let s = sim.body_state(sim.body_at(i));
             row.extend(w.force);
             row.extend(w.torque);
             row.extend(s.com);

@@ -8,7 +8,7 @@ use crate::build::BuildError;
 use crate::driver::{Driver, RunError};
 use crate::output::Series;
 use crate::scene::Scene;
-use crate::sim::{Body, Simulation};
+use crate::sim::Simulation;
 
 pub(super) fn cone<T: Real>(
     scene: &Scene,
@@ -46,10 +46,10 @@ pub(super) fn cone<T: Real>(
             stopped = Some(super::halt(e)?);
             break;
         }
-        let st = sim.body_state(Body(body));
+        let st = sim.body_state(sim.body_at(body));
         let tip = st.origin[2] - 0.5 * height;
         let (tip_depth, base_depth) = (surface - tip, surface - (tip + height));
-        let f = sim.fsi_wrench(Body(body)).force[2];
+        let f = sim.fsi_wrench(sim.body_at(body)).force[2];
         series.push(&sim, None, &[tip_depth, base_depth, f, f / area]);
         let vals = [tip_depth, base_depth, f, f / area];
         driver.publish(

@@ -11,7 +11,7 @@ use crate::build::BuildError;
 use crate::driver::{Driver, RunError};
 use crate::output::Series;
 use crate::scene::{PlateControl, Scene};
-use crate::sim::{Body, Simulation};
+use crate::sim::Simulation;
 
 /// One plate's curve in the report.
 #[derive(Clone, Debug, Serialize)]
@@ -67,7 +67,7 @@ pub(super) fn plate<T: Real>(
         };
         let bottom0 = place_on_soil(&mut sc, body)?;
         let mut sim = Simulation::<T>::new(&sc)?;
-        let id = sim.rigid_id(Body(body));
+        let id = sim.rigid_id(sim.body_at(body));
         if let PlateControl::Load(f) = control {
             sim.system.rigid.set_extra_force(id, [0.0, 0.0, -f]);
         }
@@ -83,9 +83,9 @@ pub(super) fn plate<T: Real>(
                 stopped = Some(super::halt(e)?);
                 break;
             }
-            let st = sim.body_state(Body(body));
+            let st = sim.body_state(sim.body_at(body));
             let sinkage = bottom0 - (st.origin[2] - offset);
-            let p = sim.fsi_wrench(Body(body)).force[2] / area;
+            let p = sim.fsi_wrench(sim.body_at(body)).force[2] / area;
             s.push(&sim, multi.then_some(b), &[sinkage, p]);
             driver.publish(&sim, "/rig/plate", "regolith.Rig.plate", &[("sinkage", sinkage), ("pressure", p)])?;
             curve.push((sinkage, p));

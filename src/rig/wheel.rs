@@ -10,7 +10,7 @@ use crate::build::BuildError;
 use crate::driver::{Driver, RunError};
 use crate::output::Series;
 use crate::scene::{Scene, WheelDrive};
-use crate::sim::{Body, Simulation};
+use crate::sim::Simulation;
 
 /// Steady-state means of one wheel run.
 #[derive(Clone, Debug, Serialize)]
@@ -56,7 +56,7 @@ pub(super) fn wheel<T: Real>(
         let centre = sc.bodies[body].desc.pose.translation;
         let wheel_mass = sc.bodies[body].desc.mass.mass_of(&sc.bodies[body].desc.shape);
         let mut sim = Simulation::<T>::new(&sc)?;
-        let wheel_id = sim.rigid_id(Body(body));
+        let wheel_id = sim.rigid_id(sim.body_at(body));
         let v = slip.map_or(0.0, |s| omega * radius * (1.0 - s));
         let small = |name: &str, motion: Motion| BodyDesc {
             name: name.into(),
@@ -133,8 +133,8 @@ pub(super) fn wheel<T: Real>(
                 stopped = Some(halt(e)?);
                 break;
             }
-            let st = sim.body_state(Body(body));
-            let w = sim.fsi_wrench(Body(body));
+            let st = sim.body_state(sim.body_at(body));
+            let w = sim.fsi_wrench(sim.body_at(body));
             let measured = 1.0 - st.linvel[0] / (omega * radius);
             let (dbp, torque, sinkage) = (w.force[0], -w.torque[1], centre[2] - st.origin[2]);
             s.push(&sim, multi.then_some(label), &[measured, dbp, torque, sinkage]);

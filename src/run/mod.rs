@@ -19,7 +19,7 @@ use crate::output::Recorder;
 use crate::output::plot::DRAWS_PLOTS;
 use crate::output::{TerrainSeries, figures, write_figure, write_json, write_particles_csv};
 use crate::scene::{Precision, Scene};
-use crate::sim::{Body, Simulation};
+use crate::sim::Simulation;
 
 /// Options of [`run_scene`].
 #[derive(Clone, Debug)]
@@ -246,8 +246,8 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
 fn body_summaries<T: Real>(s: &Simulation<T>) -> Vec<BodySummary> {
     (0..s.scene.bodies.len())
         .map(|i| {
-            let st = s.body_state(Body(i));
-            let w = s.fsi_wrench(Body(i));
+            let st = s.body_state(s.body_at(i));
+            let w = s.fsi_wrench(s.body_at(i));
             BodySummary {
                 name: s.scene.bodies[i].desc.name.clone(),
                 position: st.com,

@@ -155,7 +155,9 @@ pub(super) fn resolve_settings(
         Some(KernelName::Wendland) => KernelKind::Wendland,
         Some(KernelName::Cubic) => KernelKind::Cubic,
     };
-    let neighbor_skin = sph.neighbor_skin.unwrap_or(d.neighbor_skin);
+    // The wgpu backend rebuilds its lists every step: its default skin is 0.
+    let default_skin = if backend == Backend::Wgpu { 0.0 } else { d.neighbor_skin };
+    let neighbor_skin = sph.neighbor_skin.unwrap_or(default_skin);
     let max_skin = regolith_fsi::config::MAX_NEIGHBOR_SKIN;
     if !(neighbor_skin.is_finite() && (0.0..=max_skin).contains(&neighbor_skin)) {
         return Err(e(

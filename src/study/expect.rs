@@ -55,6 +55,11 @@ pub enum Metric {
     BodyZ,
     /// Final speed of the body's centre of mass (m/s).
     BodySpeed,
+    /// Mean speed of the body over the last quarter of the run (m/s): the net displacement
+    /// of its origin over that time, divided by the time. A body at rest, or rocking in place
+    /// (stick-slip), shows a mean far below its instantaneous peaks; a body still sinking or
+    /// sliding does not.
+    BodyMeanSpeed,
     /// How deep the body's lowest point ends below the initial soil surface under it (m):
     /// sinkage, crater depth.
     BodyDepth,
@@ -70,7 +75,7 @@ pub enum Metric {
 
 impl Metric {
     /// Every metric, with its name in files.
-    pub const ALL: [(Metric, &'static str); 14] = [
+    pub const ALL: [(Metric, &'static str); 15] = [
         (Metric::MaxSoilSpeed, "max_soil_speed"),
         (Metric::FinalSoilSpeed, "final_soil_speed"),
         (Metric::EscapedFraction, "escaped_fraction"),
@@ -81,6 +86,7 @@ impl Metric {
         (Metric::MaxDisplacement, "max_displacement"),
         (Metric::BodyZ, "body_z"),
         (Metric::BodySpeed, "body_speed"),
+        (Metric::BodyMeanSpeed, "body_mean_speed"),
         (Metric::BodyDepth, "body_depth"),
         (Metric::UeharaRatio, "uehara_ratio"),
         (Metric::ReportedFailure, "reported_failure"),
@@ -95,7 +101,9 @@ impl Metric {
     /// Its unit (empty: none).
     pub fn unit(self) -> &'static str {
         match self {
-            Self::MaxSoilSpeed | Self::FinalSoilSpeed | Self::RmsSpeedFinal | Self::BodySpeed => "m/s",
+            Self::MaxSoilSpeed | Self::FinalSoilSpeed | Self::RmsSpeedFinal | Self::BodySpeed | Self::BodyMeanSpeed => {
+                "m/s"
+            }
             Self::MaxDisplacement | Self::BodyZ | Self::BodyDepth => "m",
             Self::Leaked | Self::InsideBodies => "particles",
             _ => "",
@@ -104,7 +112,7 @@ impl Metric {
 
     /// Whether the check names a body.
     pub fn needs_body(self) -> bool {
-        matches!(self, Self::BodyZ | Self::BodySpeed | Self::BodyDepth | Self::UeharaRatio)
+        matches!(self, Self::BodyZ | Self::BodySpeed | Self::BodyMeanSpeed | Self::BodyDepth | Self::UeharaRatio)
     }
 }
 

@@ -23,8 +23,11 @@ struct RunFigures {
     rms_final: f64,
     max_displacement: f64,
     leaked: usize,
-    /// Per scene body: final origin height, speed, depth below the initial surface.
-    bodies: Vec<[f64; 3]>,
+    /// Per scene body: final origin height, speed, depth below the initial surface, and the
+    /// mean speed over the last quarter of the run.
+    bodies: Vec<[f64; 4]>,
+    /// Simulated time and every body's origin after each exchange (for the mean speed).
+    track: Vec<(f64, Vec<[f64; 3]>)>,
 }
 
 /// Measures a scene's runs for [`crate::study::stability`].
@@ -55,8 +58,10 @@ pub struct Figures {
     pub max_displacement: f64,
     /// Largest count of particles through a wall at the end of any run.
     pub leaked: usize,
-    /// Per body (by name): final origin height, speed and depth below the initial surface (m).
-    pub bodies: Vec<(String, [f64; 3])>,
+    /// Per body (by name): final origin height (m), speed (m/s), depth below the initial
+    /// surface (m), and mean speed over the last quarter of the run (m/s: the net
+    /// displacement of its origin over that time, divided by the time; blind to oscillation).
+    pub bodies: Vec<(String, [f64; 4])>,
     /// Per body: shape, initial velocity (m/s) and mass (kg).
     pub shapes: Vec<(String, ShapeDesc, [f64; 3], f64)>,
 }
@@ -111,6 +116,23 @@ fn ke_growth(r: &RunFigures) -> f64 {
     } else {
         0.0
     }
+}
+
+/// Per body, the net displacement of its origin over the last quarter of the run so far,
+/// over that time (m/s): the sample nearest the three-quarter time to the last one. NaN
+/// until two samples span it.
+fn mean_speeds(t0: f64, track: &[(f64, Vec<[f64; 3]>)]) -> Vec<f64> {
+    let Some((t_end, last)) = track.last() else {
+        return Vec::new();
+    };
+    let t_from = t0 + 0.75 * (t_end - t0);
+    let k = track.partition_point(|(t, _)| *t < t_from).min(track.len() - 1);
+    let (t_a, first) = &track[k];
+    let dt = t_end - t_a;
+    last.iter()
+        .zip(first)
+        .map(|(b, a)| if dt > 0.0 { (0..3).map(|i| (b[i] - a[i]).powi(2)).sum::<f64>().sqrt() / dt } else { f64::NAN })
+        .collect()
 }
 
 /// Soil particle centres deeper than `depth` inside body `b`'s shape.
@@ -195,15 +217,19 @@ impl<T: Real> Observer<T> for Probe {
             }
             None => 0,
         };
+        let origins: Vec<[f64; 3]> = sim.bodies().map(|b| sim.body_state(b).origin).collect();
+        run.track.push((sim.time(), origins));
+        let means = mean_speeds(run.t0, &run.track);
         run.bodies = sim
             .bodies()
-            .map(|b| {
+            .zip(means)
+            .map(|(b, mean)| {
                 let st = sim.body_state(b);
                 let shape = &sim.scene.bodies[b.index()].desc.shape;
                 let lowest = shape.lowest_z(&Pose { translation: st.origin, rotation: st.rotation });
                 let surface = sim.initial_surface_height(st.origin[0], st.origin[1], 0.5 * d0).unwrap_or(f64::NAN);
                 let speed = st.linvel.iter().map(|v| v * v).sum::<f64>().sqrt();
-                [st.origin[2], speed, surface - lowest]
+                [st.origin[2], speed, surface - lowest, mean]
             })
             .collect();
         Ok(())

@@ -290,6 +290,7 @@ fn measure(
         Metric::BodyZ => body(0),
         Metric::BodySpeed => body(1),
         Metric::BodyDepth => body(2),
+        Metric::BodyMeanSpeed => body(3),
         Metric::UeharaRatio => uehara_ratio(x, scene, f).unwrap_or(f64::NAN),
         Metric::ReportedFailure | Metric::Refused => f64::NAN,
     }
