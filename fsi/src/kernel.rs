@@ -29,11 +29,10 @@ impl<T: Real> Kernel<T> for WendlandC2 {
     }
     #[inline(always)]
     fn w(r: T, inv_h: T, alpha: T) -> T {
+        // Branch-free: t = 0 at and beyond the support (pair loops visit listed pairs outside
+        // it, and an unpredictable branch costs more than the arithmetic).
         let q = r * inv_h;
-        if q >= T::of(2.0) {
-            return T::zero();
-        }
-        let t = T::one() - T::of(0.5) * q;
+        let t = (T::one() - T::of(0.5) * q).max(T::zero());
         let t2 = t * t;
         alpha * t2 * t2 * (T::of(2.0) * q + T::one())
     }
@@ -41,10 +40,7 @@ impl<T: Real> Kernel<T> for WendlandC2 {
     fn grad_factor(r: T, inv_h: T, alpha: T) -> T {
         // dW/dr = −5 α q (1 − q/2)³ / h, divided by r = q h.
         let q = r * inv_h;
-        if q >= T::of(2.0) {
-            return T::zero();
-        }
-        let t = T::one() - T::of(0.5) * q;
+        let t = (T::one() - T::of(0.5) * q).max(T::zero());
         -T::of(5.0) * alpha * t * t * t * inv_h * inv_h
     }
 }

@@ -183,13 +183,12 @@ fn pair_term<T: Real, const VISC: bool>(
 ) -> Vec3<T> {
     let mut ga = (pa.s + pb.s).mul_vec(gw);
     if VISC {
-        let vr = vab.dot(r);
-        if vr < T::zero() {
-            let mu = c.h * vr / (r2 + c.eta2);
-            let half = T::of(0.5);
-            let pi = -c.visc_alpha * half * (pa.cs + pb.cs) * mu / (half * (pa.rho + pb.rho));
-            ga -= gw * pi;
-        }
+        // Π = −α c̄ μ / ρ̄ with μ = h v·r / (r² + η²) on approaching pairs (v·r < 0), 0 else;
+        // c̄ and ρ̄ are pair means, so Π = −α (c_a + c_b) h min(v·r, 0) / ((r² + η²)(ρ_a + ρ_b)):
+        // one division, and no branch (half the pairs approach, at random).
+        let vr = vab.dot(r).min(T::zero());
+        let pi = -c.visc_alpha * (pa.cs + pb.cs) * (c.h * vr) / ((r2 + c.eta2) * (pa.rho + pb.rho));
+        ga -= gw * pi;
     }
     ga
 }
@@ -217,15 +216,7 @@ pub(crate) fn soil_rates<
     out.par_iter_mut().enumerate().for_each(|(a, out)| {
         let pa = &soil[a];
         out.moduli = moduli[a];
-        // Sums in locals, each neighbour kind in its own inlined loop: the compiler keeps the
-        // accumulators out of memory instead of calling a closure per pair.
-        let mut sums = PairSums::default();
-        for &b in nl_ss.of(a) {
-            sums.add::<K, VISC, XSPH, PPST, FS, true>(c, pa, &soil[b as usize]);
-        }
-        for &w in nl_sm.of(a) {
-            sums.add::<K, VISC, XSPH, PPST, FS, false>(c, pa, &markers[w as usize]);
-        }
+        let sums = neighbour_sums::<T, K, VISC, XSPH, PPST, FS>(c, pa, nl_ss.of(a), nl_sm.of(a), soil, markers);
         let d = sums.l.sym();
         let spin = sums.l.skew();
         out.drho = sums.drho * pa.rho;
@@ -239,6 +230,28 @@ pub(crate) fn soil_rates<
             out.contact = sums.contact;
         }
     });
+}
+
+/// Sums over one soil particle's neighbours (`ss`: soil, `sm`: markers). Sums in locals, each
+/// neighbour kind in its own inlined loop: the compiler keeps the accumulators in registers
+/// instead of calling a closure per pair.
+#[inline(always)]
+fn neighbour_sums<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: bool, const PPST: bool, const FS: bool>(
+    c: &PairConsts<T>,
+    pa: &Packed<T>,
+    ss: &[u32],
+    sm: &[u32],
+    soil: &[Packed<T>],
+    markers: &[Packed<T>],
+) -> PairSums<T> {
+    let mut sums = PairSums::default();
+    for &b in ss {
+        sums.add::<K, VISC, XSPH, PPST, FS, true>(c, pa, &soil[b as usize]);
+    }
+    for &w in sm {
+        sums.add::<K, VISC, XSPH, PPST, FS, false>(c, pa, &markers[w as usize]);
+    }
+    sums
 }
 
 /// What one soil particle's neighbours add up to (see [`soil_rates`]).

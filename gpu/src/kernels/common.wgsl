@@ -184,12 +184,11 @@ fn reach_of(c: vec3<i32>) -> Reach {
 fn pair_term(pa: Packed, pb: Packed, r: vec3<f32>, r2: f32, gw: vec3<f32>, vab: vec3<f32>) -> vec3<f32> {
     var ga = sym_mul_vec(sym_add(packed_s(pa), packed_s(pb)), gw);
     if (VISC) {
-        let vr = dot(vab, r);
-        if (vr < 0.0) {
-            let mu = prm.h * vr / (r2 + prm.eta2);
-            let pi = -prm.visc_alpha * 0.5 * (pa.cs + pb.cs) * mu / (0.5 * (pa.rho + pb.rho));
-            ga = ga - gw * pi;
-        }
+        // Approaching pairs only (v.r < 0), without a branch; one division (the CPU twin's
+        // form: Pi = -alpha (c_a + c_b) h min(v.r, 0) / ((r2 + eta2)(rho_a + rho_b))).
+        let vr = min(dot(vab, r), 0.0);
+        let pi = -prm.visc_alpha * (pa.cs + pb.cs) * (prm.h * vr) / ((r2 + prm.eta2) * (pa.rho + pb.rho));
+        ga = ga - gw * pi;
     }
     return ga;
 }
