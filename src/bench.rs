@@ -69,6 +69,8 @@ pub struct BenchResult {
     /// Neighbour-list builds during the timed steps (CPU backend; the wgpu backend rebuilds
     /// every step).
     pub list_builds: u64,
+    /// Of those, steps made again because their midpoint stage left the skin (0 on wgpu).
+    pub stage_retries: u64,
 }
 
 /// The smallest bench block: 4 × 4 × 8 particles.
@@ -120,6 +122,7 @@ fn bench_t<T: Real>(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -
     }
     let evals = if scene.solver.integrator == regolith_fsi::config::Integrator::Rk2 { 2.0 } else { 1.0 };
     let builds0 = m.solver.as_cpu().map_or(0, |c| c.list_builds());
+    let retries0 = m.solver.as_cpu().map_or(0, |c| c.stage_retries());
     let start = Instant::now();
     let mut pairs = 0.0;
     for _ in 0..steps {
@@ -142,6 +145,7 @@ fn bench_t<T: Real>(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -
         adapter: m.solver.adapter(),
         neighbor_skin: scene.solver.neighbor_skin,
         list_builds: m.solver.as_cpu().map_or(steps, |c| c.list_builds() - builds0),
+        stage_retries: m.solver.as_cpu().map_or(0, |c| c.stage_retries() - retries0),
     })
 }
 
@@ -206,6 +210,8 @@ pub struct WheelBenchResult {
     pub neighbor_skin: f64,
     /// Neighbour-list builds during the timed exchanges.
     pub list_builds: u64,
+    /// Of those, steps made again because their midpoint stage left the skin.
+    pub stage_retries: u64,
 }
 
 /// Runs the wheel-long bench: `warmup` untimed exchanges (1 ms each), then `exchanges` timed.
@@ -221,6 +227,7 @@ pub fn run_wheel_long(scene: &Scene, warmup: u64, exchanges: u64) -> Result<Whee
     let t0 = sim.time();
     let c0 = sim.system.fluid.classifications();
     let builds0 = sim.system.fluid.as_cpu().map_or(0, |c| c.list_builds());
+    let retries0 = sim.system.fluid.as_cpu().map_or(0, |c| c.stage_retries());
     let start = Instant::now();
     for _ in 0..exchanges {
         let r = sim.step()?;
@@ -250,5 +257,6 @@ pub fn run_wheel_long(scene: &Scene, warmup: u64, exchanges: u64) -> Result<Whee
         threads: rayon::current_num_threads(),
         neighbor_skin: scene.solver.neighbor_skin,
         list_builds: f.as_cpu().map_or(steps, |c| c.list_builds() - builds0),
+        stage_retries: f.as_cpu().map_or(0, |c| c.stage_retries() - retries0),
     })
 }

@@ -73,7 +73,7 @@ pub(super) fn run(
         }
         let r = run_bench(&scene, m, warmup, steps).context("bench run failed")?;
         println!(
-            "bench {:<15} {} {} skin {} h: {} particles, {} markers, {} steps ({} list builds) in {:.2} s: {:.3e} particle-steps/s, {:.3e} listed pairs/s ({:.1} listed neighbours/particle, {} threads, adapter {})",
+            "bench {:<15} {} {} skin {} h: {} particles, {} markers, {} steps ({} list builds, {} steps redone) in {:.2} s: {:.3e} particle-steps/s, {:.3e} listed pairs/s ({:.1} listed neighbours/particle, {} threads, adapter {})",
             r.model,
             r.backend,
             r.precision,
@@ -82,6 +82,7 @@ pub(super) fn run(
             r.markers,
             r.steps,
             r.list_builds,
+            r.stage_retries,
             r.seconds,
             r.particle_steps_per_s,
             r.interactions_per_s,
@@ -124,7 +125,7 @@ pub(super) fn wheel_long(
         }
         let r = run_wheel_long(&scene, warmup, steps).context("bench run failed")?;
         println!(
-            "bench wheel-long active {} skin {} h: {} particles ({:.0} integrated per step), {} markers; {} exchanges, {} steps (dt {:.3e} s, {} list builds) in {:.2} s ({} classifications): {:.3e} simulated s per wall s, {:.3e} particle-steps/s; wheel force x {:.2} N, z {:.2} N ({} threads)",
+            "bench wheel-long active {} skin {} h: {} particles ({:.0} integrated per step), {} markers; {} exchanges, {} steps (dt {:.3e} s, {} list builds, {} steps redone) in {:.2} s ({} classifications): {:.3e} simulated s per wall s, {:.3e} particle-steps/s; wheel force x {:.2} N, z {:.2} N ({} threads)",
             if r.active { "on " } else { "off" },
             r.neighbor_skin,
             r.particles,
@@ -134,6 +135,7 @@ pub(super) fn wheel_long(
             r.steps,
             r.dt_mean,
             r.list_builds,
+            r.stage_retries,
             r.seconds,
             r.classifications,
             r.sim_s_per_wall_s,

@@ -158,6 +158,8 @@ pub struct CpuSph<T: Real> {
     /// Largest move from a step's start to its midpoint stage, last step (m).
     stage_motion: f64,
     list_builds: u64,
+    /// Steps made again from fresh lists because the midpoint stage left the skin.
+    stage_retries: u64,
 }
 
 /// Calls a rate function instantiated for the effects that are on: each combination is its
@@ -309,6 +311,7 @@ impl<T: Real> CpuSph<T> {
             bm_moved: 0.0,
             stage_motion: 0.0,
             list_builds: 0,
+            stage_retries: 0,
         })
     }
 
@@ -360,6 +363,11 @@ impl<T: Real> CpuSph<T> {
     /// Neighbour-list builds so far (one per step without a Verlet skin).
     pub fn list_builds(&self) -> u64 {
         self.list_builds
+    }
+    /// Steps whose first stage was made again from fresh lists, because the midpoint stage
+    /// moved some particle or marker out of the skin (counted in [`Self::list_builds`] too).
+    pub fn stage_retries(&self) -> u64 {
+        self.stage_retries
     }
     /// Keeps an active region from now on (`None`: the whole domain is awake). `domain.boxes`
     /// has one box per FSI body, in marker-owner order (owner `k + 1` is box `k`).
@@ -921,6 +929,7 @@ impl<T: Real> CpuSph<T> {
                     .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)));
                 self.stage_motion = stage;
                 if !rebuilt && !within_skin(moved, self.bm_moved, self.skin) {
+                    self.stage_retries += 1;
                     force = true;
                     continue;
                 }
