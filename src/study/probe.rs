@@ -235,3 +235,25 @@ impl<T: Real> Observer<T> for Probe {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::mean_speeds;
+
+    /// A body moving at constant velocity has that speed as its mean; one rocking in place
+    /// over whole periods of the window has a mean of zero (to round-off), whatever its peaks.
+    #[test]
+    fn mean_speed_is_the_net_rate_over_the_last_quarter() {
+        let dt = 1e-3;
+        let track = |f: &dyn Fn(f64) -> [f64; 3]| -> Vec<(f64, Vec<[f64; 3]>)> {
+            (0..=1000).map(|i| i as f64 * dt).map(|t| (t, vec![f(t)])).collect()
+        };
+        let steady = track(&|t| [0.3 * t, 0.0, -0.4 * t]);
+        assert!((mean_speeds(0.0, &steady)[0] - 0.5).abs() < 1e-12);
+        // 0.25 s window = 5 periods of 20 Hz; peak speed 2π·20·0.01 = 1.26 m/s.
+        let rocking = track(&|t| [0.0, 0.0, 0.01 * (2.0 * std::f64::consts::PI * 20.0 * t).sin()]);
+        assert!(mean_speeds(0.0, &rocking)[0] < 1e-9);
+        // A single sample spans no time: not measurable.
+        assert!(mean_speeds(0.0, &steady[..1])[0].is_nan());
+    }
+}
