@@ -125,6 +125,7 @@ pub fn soil_interval<T: Real>(
         report.fluid_steps += 1;
         report.max_speed = r.max_speed;
         report.pairs = r.pairs;
+        report.rarefied_max = report.rarefied_max.max(r.rarefied);
         report.dt_min = report.dt_min.min(r.dt);
         report.dt_max = report.dt_max.max(r.dt);
     }
@@ -167,6 +168,9 @@ pub struct ExchangeReport {
     pub max_speed: f64,
     /// Soil–soil and soil–marker pairs of the last substep.
     pub pairs: usize,
+    /// Most soil particles held at the density floor after a substep (see
+    /// `regolith_fsi::config::RAREFIED_DENSITY`).
+    pub rarefied_max: usize,
     /// Smallest soil step of the interval (s).
     pub dt_min: f64,
     /// Largest soil step of the interval (s).

@@ -53,6 +53,18 @@ pub const MAX_NEIGHBOR_SKIN: f64 = 1.0;
 /// it is detached from the soil and carries no stress, whatever the free-surface mode.
 pub const DETACHED_THRESHOLD: f64 = 0.2;
 
+/// Lower bound of a soil particle's density, as a fraction of its material's bulk density ρ0.
+///
+/// A parcel spread to half its packed density is a granular gas (solid fraction below about
+/// 0.3 for sands): its stress is already zero (the yield surfaces cut off tension), and the
+/// continuity equation, evaluated over a support that the parcel's few neighbours no longer
+/// fill, keeps lowering it. Its SPH volume m/ρ then grows without bound and enters every
+/// neighbour's sums, which run away (a splash off a wall reached non-finite density this way).
+/// The density is therefore held at `RAREFIED_DENSITY × ρ0` when continuity would take it
+/// lower; compression raises it again as usual. Particles held there are counted every step
+/// ([`crate::StepReport::rarefied`]); a bed, a wheel rut or a cone never comes near the bound.
+pub const RAREFIED_DENSITY: f64 = 0.5;
+
 /// What the free-surface flag does to the stress.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FreeSurfaceStress {

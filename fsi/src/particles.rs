@@ -82,4 +82,7 @@ pub struct StepReport {
     /// Soil–soil and soil–marker pairs listed per rate evaluation (within 2h + the Verlet skin
     /// on the CPU backend; those outside the support are skipped).
     pub pairs: usize,
+    /// Soil particles whose density is held at its lower bound after the step (see
+    /// [`crate::config::RAREFIED_DENSITY`]).
+    pub rarefied: usize,
 }

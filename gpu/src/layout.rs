@@ -103,7 +103,7 @@ pub struct Info {
     pub active: u32,
     pub dt: f32,
     pub max_dt: f32,
-    pub pad0: u32,
+    pub rarefied: u32,
     pub cmax: u32,
     pub vmax: u32,
     pub amax: u32,

@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 
 use crate::GpuError;
+use regolith_fsi::config::RAREFIED_DENSITY;
 
 /// What the pipeline is specialised for: fixed for a solver's lifetime.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,6 +84,7 @@ pub(crate) fn source(e: &Effects, v: &Variant, kernel: &str, with_rheology: bool
     let _ = writeln!(s, "const ADAPTIVE: bool = {};", b(e.adaptive));
     let _ = writeln!(s, "const HAS_MCC: bool = {};", b(e.mcc));
     let _ = writeln!(s, "const HAS_DP: bool = {};", b(e.dp));
+    let _ = writeln!(s, "const RAREFIED_DENSITY: f32 = {:?};", RAREFIED_DENSITY as f32);
     let _ = writeln!(s, "const FS: bool = {};", b(v.fs));
     let _ = writeln!(s, "const STAGE: bool = {};", b(v.stage));
     let _ = writeln!(s, "const STRIDE: u32 = {}u;", v.stride.max(1));

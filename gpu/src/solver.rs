@@ -775,6 +775,7 @@ impl GpuSph {
             active: self.active,
             awake: self.active,
             pairs: info.pairs as usize,
+            rarefied: info.rarefied as usize,
         })
     }
 

@@ -129,6 +129,9 @@ pub struct RunStats {
     pub awake_min: usize,
     /// Most particles integrated in a step.
     pub awake_max: usize,
+    /// Most soil particles held at the density floor after a step
+    /// (`regolith_fsi::config::RAREFIED_DENSITY`).
+    pub rarefied_max: usize,
 }
 
 impl RunStats {
@@ -145,6 +148,7 @@ impl RunStats {
             dt_max: 0.0,
             awake_min: usize::MAX,
             awake_max: 0,
+            rarefied_max: 0,
         }
     }
 
@@ -251,6 +255,7 @@ impl<'o, T: Real> Driver<'o, T> {
         s.dt_min = s.dt_min.min(r.dt_min);
         s.dt_max = s.dt_max.max(r.dt_max);
         s.max_speed_run = s.max_speed_run.max(r.max_speed);
+        s.rarefied_max = s.rarefied_max.max(r.rarefied_max);
         for o in &mut self.observers {
             o.after_step(sim, &self.stats)?;
         }

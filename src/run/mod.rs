@@ -173,6 +173,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
         mass_initial: fluid.map_or(0.0, |f| f.total_mass()),
         mass_final: fluid.map_or(0.0, |f| f.active_mass()),
         escaped_particles: fluid.map_or(0, |f| f.len() - f.active()),
+        rarefied_max: stats.rarefied_max,
         active_domain: match fluid {
             Some(f) if scene.active.is_some() => Some(summary::ActiveSummary {
                 awake_min: if stats.steps > 0 { stats.awake_min } else { f.awake() },

@@ -89,6 +89,10 @@ pub struct Summary {
     pub mass_final: f64,
     /// Particles that left the domain.
     pub escaped_particles: usize,
+    /// Most soil particles held at the density floor in one step
+    /// (`regolith_fsi::config::RAREFIED_DENSITY`: spread to half their bulk density, a
+    /// splash's grains in flight).
+    pub rarefied_max: usize,
     /// The active region, when the scene keeps one (`[sph.active]`).
     pub active_domain: Option<ActiveSummary>,
     /// True when the run stopped on a non-finite value.

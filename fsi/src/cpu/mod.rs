@@ -24,7 +24,9 @@ use rayon::prelude::*;
 
 use crate::Real;
 use crate::active::{ActiveDomain, ActiveSettings, Role, RoleCounts, WorldBox};
-use crate::config::{DETACHED_THRESHOLD, FreeSurfaceStress, Integrator, KernelKind, SolverConfig, TimeStep};
+use crate::config::{
+    DETACHED_THRESHOLD, FreeSurfaceStress, Integrator, KernelKind, RAREFIED_DENSITY, SolverConfig, TimeStep,
+};
 use crate::kernel::{CubicSpline, Kernel, WendlandC2};
 use crate::math::{Sym3, Vec3};
 use crate::particles::{MarkerInit, ParticleInit, SolverError, StepReport};
@@ -963,6 +965,12 @@ impl<T: Real> CpuSph<T> {
         self.steps += 1;
         let max_speed = self.vel[..n].par_iter().map(|v| v.norm().as_f64()).reduce(|| 0.0, f64::max);
         let max_accel = self.rates[..n].par_iter().map(|r| r.acc.norm().as_f64()).reduce(|| 0.0, f64::max);
+        let (materials, floor) = (&self.materials, T::of(RAREFIED_DENSITY));
+        let rarefied = self.rho[..n]
+            .par_iter()
+            .zip(self.material[..n].par_iter())
+            .filter(|(r, m)| **r <= materials[**m as usize].density * floor)
+            .count();
         Ok(StepReport {
             dt,
             max_speed,
@@ -970,6 +978,7 @@ impl<T: Real> CpuSph<T> {
             active: self.active,
             awake: n,
             pairs: self.nl_ss.pairs() + self.nl_sm.pairs(),
+            rarefied,
         })
     }
 
@@ -986,6 +995,7 @@ impl<T: Real> CpuSph<T> {
         let rk2 = self.cfg.integrator == Integrator::Rk2;
         let (step, time) = (self.steps, self.time + dt);
         let materials = &self.materials;
+        let floor = T::of(RAREFIED_DENSITY);
         let rates = &self.rates[..n];
         let fsf = &self.free_surface[..n];
         let det = &self.detached[..n];
@@ -1006,7 +1016,7 @@ impl<T: Real> CpuSph<T> {
                     let r = &rates[i];
                     *sv = vel[i] + r.acc * h;
                     *sp = pos[i] + (vel[i] + r.xsph * eps) * h;
-                    *sr = rho[i] + r.drho * h;
+                    *sr = at_least(rho[i] + r.drho * h, materials[mats[i] as usize].density * floor);
                     let (s, st) = correct(
                         &materials[mats[i] as usize],
                         &sigma[i],
@@ -1043,7 +1053,7 @@ impl<T: Real> CpuSph<T> {
                         dx += d;
                     }
                     *p += dx;
-                    *rh += r.drho * h;
+                    *rh = at_least(*rh + r.drho * h, materials[mats[i] as usize].density * floor);
                     let (s_new, st_new) =
                         correct(&materials[mats[i] as usize], s, st, r, h, det[i] || (zero_surface && fsf[i]))
                             .map_err(|e| err_rheo(i, e))?;
@@ -1062,6 +1072,12 @@ impl<T: Real> CpuSph<T> {
                 })
         }
     }
+}
+
+/// `x`, or `floor` when `x` is below it; NaN stays NaN (for the finiteness check that follows).
+#[inline]
+fn at_least<T: Real>(x: T, floor: T) -> T {
+    if x < floor { floor } else { x }
 }
 
 /// Whether lists built with `skin` still hold every pair within the support after the soil

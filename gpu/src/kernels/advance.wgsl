@@ -3,8 +3,9 @@
 // positions with the midpoint velocity; Euler with the new one), with XSPH, concentration
 // shifting (off at the free surface, capped at 0.2 d0) and the checks that stop a run: a
 // failed return mapping, or a non-finite position, velocity or density. Detached particles,
-// and surface ones in the `Zero` mode, carry no stress. CPU twin: `CpuSph::advance` and
-// `cpu::correct`.
+// and surface ones in the `Zero` mode, carry no stress. The density is held at
+// RAREFIED_DENSITY x rho0 when continuity would take it lower (counted in `info.rarefied`).
+// CPU twin: `CpuSph::advance`, `cpu::correct` and `cpu::at_least`.
 
 @group(0) @binding(0) var<uniform> prm: Params;
 @group(0) @binding(1) var<storage, read_write> parts: array<Particle>;
@@ -45,6 +46,11 @@ fn correct(mat: Material, sigma: Sym, pc: f32, sv: f32, r: Rate, h: f32, stress_
     return out;
 }
 
+// x, or floor when x is below it; NaN stays NaN for the density check.
+fn at_least(x: f32, floor: f32) -> f32 {
+    return select(x, floor, x < floor);
+}
+
 fn fail(id: u32, code: u32) {
     atomicMin(&info.err_id, id);
     atomicMax(&info.err_code, code);
@@ -72,7 +78,7 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>) {
         var q = p;
         q.px = sp.x; q.py = sp.y; q.pz = sp.z;
         q.vx = sv.x; q.vy = sv.y; q.vz = sv.z;
-        q.rho = p.rho + r.drho * h;
+        q.rho = at_least(p.rho + r.drho * h, mat.density * RAREFIED_DENSITY);
         q.sxx = c.s.xx; q.syy = c.s.yy; q.szz = c.s.zz; q.sxy = c.s.xy; q.sxz = c.s.xz; q.syz = c.s.yz;
         q.pc = c.pc;
         q.sv = c.sv;
@@ -92,7 +98,9 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>) {
         dx += d;
     }
     let np = pos + dx;
-    let rho = p.rho + r.drho * h;
+    let floor = mat.density * RAREFIED_DENSITY;
+    let rho = at_least(p.rho + r.drho * h, floor);
+    if (rho <= floor) { atomicAdd(&info.rarefied, 1u); }
     let c = correct(mat, load_sigma(p), p.pc, p.sv, r, h, stress_free, &err);
     p.px = np.x; p.py = np.y; p.pz = np.z;
     p.vx = v.x; p.vy = v.y; p.vz = v.z;

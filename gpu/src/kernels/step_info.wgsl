@@ -18,6 +18,7 @@ fn reset() {
     atomicStore(&info.err_code, 0u);
     atomicStore(&info.vmax_end, 0u);
     atomicStore(&info.amax_end, 0u);
+    atomicStore(&info.rarefied, 0u);
 }
 
 @compute @workgroup_size(64)
