@@ -15,8 +15,10 @@
 //! 8. [`rig`]: the plate, cone and wheel rigs (body controllers with their reports);
 //! 9. [`run`]: a whole `regolith run` — build, drive, write, summarise;
 //! 10. [`study`]: many runs of shipped scenes, checked and tabulated (the stability suite);
-//! 11. [`error`]: the facade [`Error`] over every stage's error type;
-//! 12. [`bench`](mod@bench), [`cli`]: the benchmark and the command-line tool.
+//! 11. [`calibrate`]: soil parameters from measurements (MCC from lab data, fits with
+//!     standard errors, the Mohr–Coulomb envelope);
+//! 12. [`error`]: the facade [`Error`] over every stage's error type;
+//! 13. [`bench`](mod@bench), [`cli`]: the benchmark and the command-line tool.
 //!
 //! `tests/architecture.rs` fails on an import against this order.
 //!
@@ -27,6 +29,7 @@
 
 pub mod bench;
 pub mod build;
+pub mod calibrate;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod driver;

@@ -7,9 +7,22 @@ use std::path::{Path, PathBuf};
 
 /// The root crate's top-level modules, in the order the data flows.
 /// `error`, the facade's error type, gathers the stages' own error types, so it comes after them.
-const LAYERS: [&str; 14] = [
-    "input", "material", "element", "scene", "build", "sim", "driver", "output", "rig", "run", "study", "error",
-    "bench", "cli",
+const LAYERS: [&str; 15] = [
+    "input",
+    "material",
+    "element",
+    "scene",
+    "build",
+    "sim",
+    "driver",
+    "output",
+    "rig",
+    "run",
+    "study",
+    "calibrate",
+    "error",
+    "bench",
+    "cli",
 ];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {

@@ -136,3 +136,45 @@ fn element_writes_json_and_plots() {
     let png = std::fs::read(out.join("element.png")).expect("png");
     assert_eq!(&png[1..4], b"PNG");
 }
+
+#[test]
+fn calibrate_mcc_writes_a_material_that_loads_and_names_bad_data_in_one_line() {
+    // Exact rows: recompression at κ = 0.02 to p_c0 = 40 kPa, the NCL (λ = 0.1, v_λ = 2.3),
+    // an unload at κ.
+    let ncl = |p: f64| 2.3 - 0.1 * (p / 1000.0f64).ln();
+    let mut rows = String::from("# isotropic test\np,e\n");
+    for p in [20e3f64, 25e3, 30e3, 35e3] {
+        rows += &format!("{p},{}\n", ncl(40e3) + 0.02 * (40e3 / p).ln() - 1.0);
+    }
+    for p in [40e3, 60e3, 90e3, 140e3, 200e3] {
+        rows += &format!("{p},{}\n", ncl(p) - 1.0);
+    }
+    for p in [150e3f64, 100e3, 60e3] {
+        rows += &format!("{p},{}\n", ncl(200e3) + 0.02 * (200e3 / p).ln() - 1.0);
+    }
+    let iso = material("iso.csv", &rows);
+    let crit = material("crit.csv", "p,q\n50e3,60e3\n100e3,120e3\n");
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_calibrate_out");
+    let _ = std::fs::remove_dir_all(&out);
+    let o = out.display().to_string();
+    let (code, stdout, err) =
+        regolith(&["calibrate", "mcc", "--isotropic", &iso, "--critical", &crit, "--base", CLAY, "--out", &o]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("OCR = 2.000"), "{stdout}");
+    let m = regolith::material::load_material_file(&out.join("material.toml")).expect("the written material loads");
+    let near = |a: Option<f64>, b: f64| (a.expect("key written") - b).abs() < 1e-9 * b;
+    assert!(near(m.mcc_lambda, 0.1) && near(m.mcc_kappa, 0.02) && near(m.mcc_v_lambda, 2.3), "{m:?}");
+    assert!(near(m.ocr, 2.0) && near(m.mcc_m, 1.2) && near(m.density, 1800.0), "{m:?}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("mcc.json")).expect("json")).expect("valid json");
+    assert!((json["critical_state"]["phi_cs"].as_f64().expect("φ_cs") - 30.0).abs() < 1e-9);
+    assert!(std::fs::metadata(out.join("isotropic.png")).expect("plot").len() > 10_000);
+    // Wrong data: one line naming the file, the line and the column.
+    let bad = material("bad.csv", "p,v\n1e4,2.0\n2e4,x\n");
+    assert_one_line_error(&["calibrate", "mcc", "--isotropic", &bad, "--out", &o], "bad.csv:3: key `column v`");
+    let nocol = material("nocol.csv", "p,w\n1e4,2.0\n");
+    assert_one_line_error(&["calibrate", "mcc", "--isotropic", &nocol, "--out", &o], "columns needed: p, v, e");
+    let flat = material("flat.csv", "p,v\n1e4,2.0\n2e4,1.9\n3e4,1.85\n4e4,1.82\n");
+    assert_one_line_error(&["calibrate", "mcc", "--isotropic", &flat, "--out", &o], "κ cannot be fitted");
+    assert_one_line_error(&["calibrate", "mcc", "--isotropic", &iso, "--critical", &bad, "--out", &o], "column q");
+}

@@ -2,6 +2,7 @@
 //! naming the file or flag and what is allowed) or a run failure (exit code 1).
 
 mod bench;
+mod calibrate;
 mod check;
 mod element;
 mod inspect;
@@ -140,9 +141,38 @@ pub enum StudyCommand {
     },
 }
 
+/// Calibrations.
+#[derive(Debug, Subcommand)]
+pub enum CalibrateCommand {
+    /// Fit Modified Cam Clay parameters to lab data: λ, κ, v_λ (at 1 kPa) and the OCR from an
+    /// isotropic compression test, M from critical states; writes mcc.json, isotropic.png/svg
+    /// and, with --base, a ready material.toml.
+    Mcc {
+        /// Isotropic compression CSV: a header with `p` (Pa) and `v` (specific volume) or `e`
+        /// (void ratio), rows in test order (loading, unloading and reloading).
+        #[arg(long, value_name = "FILE.csv")]
+        isotropic: PathBuf,
+        /// Critical states CSV: `p` and `q` (Pa), one row per triaxial test.
+        #[arg(long, value_name = "FILE.csv")]
+        critical: Option<PathBuf>,
+        /// Material file whose other keys (density, elasticity) the written material keeps.
+        #[arg(long, value_name = "FILE")]
+        base: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, value_name = "DIR", default_value = "out/calibrate-mcc")]
+        out: PathBuf,
+    },
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Soil parameters from measurements: `mcc` (Modified Cam Clay from lab data).
+    Calibrate {
+        /// Which calibration.
+        #[command(subcommand)]
+        calibrate: CalibrateCommand,
+    },
     /// Studies over shipped scenes: `stability` (the hard-case suite).
     Study {
         /// Which study.
@@ -326,6 +356,9 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             run::run(&scene, out.as_deref(), backend, precision, &sets, quiet)
         }
         Command::Inspect { recording } => inspect::run(&recording),
+        Command::Calibrate { calibrate: CalibrateCommand::Mcc { isotropic, critical, base, out } } => {
+            calibrate::mcc(isotropic, critical, base, out)
+        }
         Command::Study { study: StudyCommand::Stability { cases, size, cases_dir, out } } => {
             let size = match size {
                 SizeArg::Ci => "ci",

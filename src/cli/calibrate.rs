@@ -1,0 +1,46 @@
+//! `regolith calibrate`.
+
+use std::path::PathBuf;
+
+use super::Failure;
+use crate::calibrate::{McCError, McCInputs, calibrate_mcc};
+use crate::input::InputError;
+
+pub(super) fn mcc(
+    isotropic: PathBuf,
+    critical: Option<PathBuf>,
+    base: Option<PathBuf>,
+    out: PathBuf,
+) -> Result<(), Failure> {
+    let r = calibrate_mcc(&McCInputs { isotropic, critical, base, out: out.clone() }).map_err(|e| match e {
+        McCError::Input(e) => Failure::Input(e),
+        McCError::Data { file, source } => Failure::Input(InputError::file(&file, source.to_string())),
+        McCError::Output(m) => Failure::Run(anyhow::anyhow!(m)),
+    })?;
+    let f = &r.isotropic;
+    let se = |x: Option<f64>| x.map_or_else(|| "n/a".to_string(), |s| format!("{s:.2e}"));
+    println!(
+        "isotropic ({} NCL rows, {} recompression, {} excursion(s)): λ = {:.5} ± {}, κ = {:.5} ± {} (from {}), v_λ = {:.5} ± {} at {} Pa",
+        f.ncl_rows,
+        f.recompression_rows,
+        f.excursions,
+        f.lambda,
+        se(f.se_lambda),
+        f.kappa,
+        se(f.se_kappa),
+        f.kappa_from,
+        f.v_lambda,
+        se(f.se_v_lambda),
+        f.p_ref
+    );
+    println!("  sample: p0 = {:.4e} Pa, p_c0 = {:.4e} Pa, OCR = {:.3}", f.p0, f.pc0, f.ocr);
+    if let Some(c) = &r.critical_state {
+        println!("critical state ({} tests): M = {:.4} ± {}, φ_cs = {:.2}°", c.tests, c.m, se(c.se_m), c.phi_cs);
+    }
+    match &r.material_file {
+        Some(m) => println!("material: {m}"),
+        None => println!("material.toml not written: give --base MATERIAL for density and elasticity"),
+    }
+    println!("outputs in {}", out.display());
+    Ok(())
+}
