@@ -178,3 +178,34 @@ fn calibrate_mcc_writes_a_material_that_loads_and_names_bad_data_in_one_line() {
     assert_one_line_error(&["calibrate", "mcc", "--isotropic", &flat, "--out", &o], "κ cannot be fitted");
     assert_one_line_error(&["calibrate", "mcc", "--isotropic", &iso, "--critical", &bad, "--out", &o], "column q");
 }
+
+#[test]
+fn calibrate_envelope_fits_c_and_phi_with_agx_field_names() {
+    // Failure on τ = 2 kPa + σ tan 30°: σ1 = 3 σ3 + 2 c √3.
+    let mut rows = String::from("sigma3,sigma1\n");
+    for s3 in [5e3f64, 10e3, 20e3, 40e3] {
+        rows += &format!("{s3},{}\n", 3.0 * s3 + 4e3 * 3.0f64.sqrt());
+    }
+    let tests = material("triaxial.csv", &rows);
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_envelope_out");
+    let _ = std::fs::remove_dir_all(&out);
+    let o = out.display().to_string();
+    let (code, stdout, err) = regolith(&["calibrate", "envelope", "--tests", &tests, "--out", &o]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("φ = 30.000°"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("envelope.json")).expect("json")).expect("valid json");
+    assert!((json["c"].as_f64().expect("c") - 2000.0).abs() < 1e-6, "{json}");
+    assert!((json["phi"].as_f64().expect("phi") - 30.0).abs() < 1e-9);
+    assert!(json["standardError_c"].as_f64().expect("se") < 1e-6);
+    assert_eq!(json["consolidationStress"].as_array().expect("array").len(), 4);
+    assert_eq!(json["verticalStress"].as_array().expect("array").len(), 4);
+    assert!(std::fs::metadata(out.join("mohr.svg")).expect("plot").len() > 10_000);
+    let bad = material("tx_bad.csv", "sigma3,sigma1\n5e3,4e3\n1e4,3e4\n");
+    assert_one_line_error(
+        &["calibrate", "envelope", "--tests", &bad, "--out", &o],
+        "failure needs 0 ≤ sigma3 < sigma1",
+    );
+    let one = material("tx_one.csv", "sigma3,sigma1\n5e3,2e4\n");
+    assert_one_line_error(&["calibrate", "envelope", "--tests", &one, "--out", &o], "at least 2 tests");
+}

@@ -117,6 +117,31 @@ pub fn read_critical_states(path: &Path) -> Result<(Vec<f64>, Vec<f64>), InputEr
     Ok((cols[0].clone(), cols[1].clone()))
 }
 
+/// Reads triaxial failure stresses: `sigma3` (confining) and `sigma1` (vertical at failure)
+/// columns in Pa, compression positive, one row per test.
+pub fn read_failure_stresses(path: &Path) -> Result<(Vec<f64>, Vec<f64>), InputError> {
+    let (cols, _) = read_columns(path, &["sigma3", "sigma1"], None)?;
+    if cols[0].len() < 2 {
+        return Err(InputError::file(
+            path,
+            format!("has {} data rows; an envelope needs at least 2 tests", cols[0].len()),
+        ));
+    }
+    for (i, (a, b)) in cols[0].iter().zip(&cols[1]).enumerate() {
+        if !(*a >= 0.0 && b > a) {
+            return Err(InputError::key(
+                path,
+                "column sigma1",
+                format!(
+                    "row {} has sigma3 = {a}, sigma1 = {b}; failure needs 0 ≤ sigma3 < sigma1 (Pa, compression positive)",
+                    i + 1
+                ),
+            ));
+        }
+    }
+    Ok((cols[0].clone(), cols[1].clone()))
+}
+
 /// The isotropic fit.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct IsotropicFit {

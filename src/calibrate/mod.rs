@@ -4,7 +4,9 @@
 //! - [`fit`]: least-squares lines, slopes and the Mohr–Coulomb envelope of Mohr circles;
 //! - [`mcc`]: λ, κ, v_λ, OCR and M from laboratory rows;
 //! - [`calibrate_mcc`]: the whole command: read, fit, write `mcc.json`, the plot and a ready
-//!   material file.
+//!   material file;
+//! - [`calibrate_envelope`]: c and φ from triaxial failure stresses (`envelope.json` with the
+//!   field names AGX users know, and the Mohr-circle plot).
 
 pub mod fit;
 pub mod mcc;
@@ -17,6 +19,7 @@ use crate::input::{InputError, read_text};
 use crate::material::load_material_file;
 use crate::output::plot::{Figure, Panel, Series};
 use crate::output::write_figure;
+use fit::MohrCoulomb;
 use mcc::{CalibrateError, CriticalStateFit, IsotropicData, IsotropicFit};
 
 /// What `regolith calibrate mcc` reads.
@@ -50,9 +53,9 @@ pub struct McCReport {
     pub plots: Vec<String>,
 }
 
-/// Why `calibrate mcc` failed.
+/// Why a `regolith calibrate` command failed.
 #[derive(Debug, thiserror::Error)]
-pub enum McCError {
+pub enum CommandError {
     /// A wrong input file or flag.
     #[error(transparent)]
     Input(#[from] InputError),
@@ -71,25 +74,25 @@ pub enum McCError {
 
 /// Reads the data, fits, and writes `mcc.json`, `isotropic.png/svg` and (with a base material)
 /// `material.toml`, which is read back through the material loader before it is reported.
-pub fn calibrate_mcc(inp: &McCInputs) -> Result<McCReport, McCError> {
+pub fn calibrate_mcc(inp: &McCInputs) -> Result<McCReport, CommandError> {
     let data = mcc::read_isotropic(&inp.isotropic)?;
-    let iso = mcc::fit_isotropic(&data).map_err(|source| McCError::Data { file: inp.isotropic.clone(), source })?;
+    let iso = mcc::fit_isotropic(&data).map_err(|source| CommandError::Data { file: inp.isotropic.clone(), source })?;
     let cs = match &inp.critical {
         Some(path) => {
             let (p, q) = mcc::read_critical_states(path)?;
-            Some(mcc::fit_critical_state(&p, &q).map_err(|source| McCError::Data { file: path.clone(), source })?)
+            Some(mcc::fit_critical_state(&p, &q).map_err(|source| CommandError::Data { file: path.clone(), source })?)
         }
         None => None,
     };
     let base = inp.base.as_ref().map(|b| load_material_file(b).map(|_| b)).transpose()?;
     std::fs::create_dir_all(&inp.out)
-        .map_err(|e| McCError::Output(format!("cannot create {}: {e}", inp.out.display())))?;
+        .map_err(|e| CommandError::Output(format!("cannot create {}: {e}", inp.out.display())))?;
     let material_file = match base {
         Some(b) => Some(write_material(b, &iso, cs.as_ref(), &inp.out.join("material.toml"))?),
         None => None,
     };
     let plots = write_figure(&isotropic_figure(&data, &iso), &inp.out, "isotropic")
-        .map_err(|e| McCError::Output(e.to_string()))?;
+        .map_err(|e| CommandError::Output(e.to_string()))?;
     let report = McCReport {
         isotropic_file: inp.isotropic.display().to_string(),
         isotropic: iso,
@@ -99,8 +102,8 @@ pub fn calibrate_mcc(inp: &McCInputs) -> Result<McCReport, McCError> {
         plots: plots.iter().map(|p| p.display().to_string()).collect(),
     };
     let json = inp.out.join("mcc.json");
-    let text = serde_json::to_string_pretty(&report).map_err(|e| McCError::Output(e.to_string()))?;
-    std::fs::write(&json, text).map_err(|e| McCError::Output(format!("cannot write {}: {e}", json.display())))?;
+    let text = serde_json::to_string_pretty(&report).map_err(|e| CommandError::Output(e.to_string()))?;
+    std::fs::write(&json, text).map_err(|e| CommandError::Output(format!("cannot write {}: {e}", json.display())))?;
     Ok(report)
 }
 
@@ -111,7 +114,7 @@ fn write_material(
     iso: &IsotropicFit,
     cs: Option<&CriticalStateFit>,
     out: &Path,
-) -> Result<PathBuf, McCError> {
+) -> Result<PathBuf, CommandError> {
     let source = read_text(base)?;
     let mut t: toml::Table =
         source.parse().map_err(|e: toml::de::Error| InputError::file(base, e.message().to_string()))?;
@@ -134,7 +137,7 @@ fn write_material(
         )
         .into());
     }
-    let body = toml::to_string(&t).map_err(|e| McCError::Output(e.to_string()))?;
+    let body = toml::to_string(&t).map_err(|e| CommandError::Output(e.to_string()))?;
     let text = format!(
         "# Written by `regolith calibrate mcc` from {} (λ, κ, v_λ at {} Pa, OCR{}); other keys from {}.\n{body}",
         iso_source(iso),
@@ -142,7 +145,7 @@ fn write_material(
         if cs.is_some() { ", M" } else { "" },
         base.display()
     );
-    std::fs::write(out, text).map_err(|e| McCError::Output(format!("cannot write {}: {e}", out.display())))?;
+    std::fs::write(out, text).map_err(|e| CommandError::Output(format!("cannot write {}: {e}", out.display())))?;
     load_material_file(out)?;
     Ok(out.to_path_buf())
 }
@@ -173,6 +176,100 @@ pub fn isotropic_figure(d: &IsotropicData, f: &IsotropicFit) -> Figure {
             ],
             x_range: None,
             y_range: None,
+        }],
+    }
+}
+
+/// `envelope.json`: the Mohr–Coulomb fit of triaxial failure stresses, with the field names of
+/// AGX's triaxial calibration output.
+#[derive(Clone, Debug, Serialize)]
+pub struct EnvelopeReport {
+    /// The data file.
+    pub file: String,
+    /// Cohesion c (Pa).
+    pub c: f64,
+    /// Friction angle φ (degrees).
+    pub phi: f64,
+    /// Standard error of c (Pa); `null` with fewer than three tests.
+    #[serde(rename = "standardError_c")]
+    pub standard_error_c: Option<f64>,
+    /// Standard error of φ (degrees); `null` with fewer than three tests.
+    #[serde(rename = "standardError_phi")]
+    pub standard_error_phi: Option<f64>,
+    /// Confining (minor principal) stress of each test (Pa).
+    #[serde(rename = "consolidationStress")]
+    pub consolidation_stress: Vec<f64>,
+    /// Vertical (major principal) stress at failure of each test (Pa).
+    #[serde(rename = "verticalStress")]
+    pub vertical_stress: Vec<f64>,
+    /// Plots written.
+    pub plots: Vec<String>,
+}
+
+/// Reads `sigma3,sigma1` rows (Pa, compression positive: confining and vertical stress at
+/// failure), fits the tangent Mohr–Coulomb envelope, writes `envelope.json` and
+/// `mohr.png`/`.svg` into `out`.
+pub fn calibrate_envelope(file: &Path, out: &Path) -> Result<EnvelopeReport, CommandError> {
+    let (s3, s1) = mcc::read_failure_stresses(file)?;
+    let f = fit::mohr_coulomb(&s3, &s1).map_err(|source| CommandError::Data {
+        file: file.to_path_buf(),
+        source: CalibrateError::Fit { what: "Mohr–Coulomb envelope", source },
+    })?;
+    std::fs::create_dir_all(out).map_err(|e| CommandError::Output(format!("cannot create {}: {e}", out.display())))?;
+    let plots =
+        write_figure(&mohr_figure(&s3, &s1, &f), out, "mohr").map_err(|e| CommandError::Output(e.to_string()))?;
+    let report = EnvelopeReport {
+        file: file.display().to_string(),
+        c: f.c,
+        phi: f.phi,
+        standard_error_c: f.se_c,
+        standard_error_phi: f.se_phi,
+        consolidation_stress: s3,
+        vertical_stress: s1,
+        plots: plots.iter().map(|p| p.display().to_string()).collect(),
+    };
+    let json = out.join("envelope.json");
+    let text = serde_json::to_string_pretty(&report).map_err(|e| CommandError::Output(e.to_string()))?;
+    std::fs::write(&json, text).map_err(|e| CommandError::Output(format!("cannot write {}: {e}", json.display())))?;
+    Ok(report)
+}
+
+/// The Mohr circles (upper halves) and the fitted envelope τ = c + σ tan φ.
+pub fn mohr_figure(s3: &[f64], s1: &[f64], f: &MohrCoulomb) -> Figure {
+    let mut series: Vec<Series> = s3
+        .iter()
+        .zip(s1)
+        .enumerate()
+        .map(|(i, (a, b))| {
+            let (centre, radius) = (0.5 * (a + b), 0.5 * (b - a));
+            let pts = (0..=60)
+                .map(|k| {
+                    let t = std::f64::consts::PI * f64::from(k) / 60.0;
+                    (centre + radius * t.cos(), radius * t.sin())
+                })
+                .collect();
+            Series::line(format!("test {}: σ3 = {:.3e} Pa", i + 1, a), pts)
+        })
+        .collect();
+    // Axes to about the same scale (the plot area is about 0.8 as high as it is wide), so
+    // that circles look round and the tangent points can be seen; the envelope ends inside.
+    let x_max = 1.05 * s1.iter().copied().fold(0.0, f64::max);
+    let y_max = 0.8 * x_max;
+    let tan = f.phi.to_radians().tan();
+    let x_end = ((y_max - f.c) / tan).clamp(0.0, x_max);
+    series.push(Series::line(
+        format!("envelope: c = {:.4e} Pa, φ = {:.2}°", f.c, f.phi),
+        vec![(0.0, f.c), (x_end, f.c + x_end * tan)],
+    ));
+    Figure {
+        panels: vec![Panel {
+            title: "Mohr circles at failure".into(),
+            x_label: "normal stress σ (Pa)".into(),
+            y_label: "shear stress τ (Pa)".into(),
+            x_log: false,
+            series,
+            x_range: Some((0.0, x_max)),
+            y_range: Some((0.0, y_max)),
         }],
     }
 }

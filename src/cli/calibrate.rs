@@ -3,8 +3,34 @@
 use std::path::PathBuf;
 
 use super::Failure;
-use crate::calibrate::{McCError, McCInputs, calibrate_mcc};
+use crate::calibrate::{CommandError, McCInputs, calibrate_envelope, calibrate_mcc};
 use crate::input::InputError;
+
+fn failure(e: CommandError) -> Failure {
+    match e {
+        CommandError::Input(e) => Failure::Input(e),
+        CommandError::Data { file, source } => Failure::Input(InputError::file(&file, source.to_string())),
+        CommandError::Output(m) => Failure::Run(anyhow::anyhow!(m)),
+    }
+}
+
+fn se(x: Option<f64>) -> String {
+    x.map_or_else(|| "n/a".to_string(), |s| format!("{s:.2e}"))
+}
+
+pub(super) fn envelope(tests: PathBuf, out: PathBuf) -> Result<(), Failure> {
+    let r = calibrate_envelope(&tests, &out).map_err(failure)?;
+    println!(
+        "Mohr–Coulomb envelope of {} tests: c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°",
+        r.consolidation_stress.len(),
+        r.c,
+        se(r.standard_error_c),
+        r.phi,
+        se(r.standard_error_phi)
+    );
+    println!("outputs in {}", out.display());
+    Ok(())
+}
 
 pub(super) fn mcc(
     isotropic: PathBuf,
@@ -12,13 +38,8 @@ pub(super) fn mcc(
     base: Option<PathBuf>,
     out: PathBuf,
 ) -> Result<(), Failure> {
-    let r = calibrate_mcc(&McCInputs { isotropic, critical, base, out: out.clone() }).map_err(|e| match e {
-        McCError::Input(e) => Failure::Input(e),
-        McCError::Data { file, source } => Failure::Input(InputError::file(&file, source.to_string())),
-        McCError::Output(m) => Failure::Run(anyhow::anyhow!(m)),
-    })?;
+    let r = calibrate_mcc(&McCInputs { isotropic, critical, base, out: out.clone() }).map_err(failure)?;
     let f = &r.isotropic;
-    let se = |x: Option<f64>| x.map_or_else(|| "n/a".to_string(), |s| format!("{s:.2e}"));
     println!(
         "isotropic ({} NCL rows, {} recompression, {} excursion(s)): λ = {:.5} ± {}, κ = {:.5} ± {} (from {}), v_λ = {:.5} ± {} at {} Pa",
         f.ncl_rows,

@@ -144,6 +144,17 @@ pub enum StudyCommand {
 /// Calibrations.
 #[derive(Debug, Subcommand)]
 pub enum CalibrateCommand {
+    /// Fit the tangent Mohr–Coulomb envelope (c, φ with standard errors) to triaxial failure
+    /// stresses; writes envelope.json and mohr.png/svg.
+    Envelope {
+        /// CSV with `sigma3` (confining) and `sigma1` (vertical at failure) in Pa, compression
+        /// positive, one row per test.
+        #[arg(long, value_name = "FILE.csv")]
+        tests: PathBuf,
+        /// Output folder.
+        #[arg(long, value_name = "DIR", default_value = "out/calibrate-envelope")]
+        out: PathBuf,
+    },
     /// Fit Modified Cam Clay parameters to lab data: λ, κ, v_λ (at 1 kPa) and the OCR from an
     /// isotropic compression test, M from critical states; writes mcc.json, isotropic.png/svg
     /// and, with --base, a ready material.toml.
@@ -167,7 +178,8 @@ pub enum CalibrateCommand {
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Soil parameters from measurements: `mcc` (Modified Cam Clay from lab data).
+    /// Soil parameters from measurements: `mcc` (Modified Cam Clay from lab data), `envelope`
+    /// (c and φ from triaxial failure stresses).
     Calibrate {
         /// Which calibration.
         #[command(subcommand)]
@@ -356,6 +368,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             run::run(&scene, out.as_deref(), backend, precision, &sets, quiet)
         }
         Command::Inspect { recording } => inspect::run(&recording),
+        Command::Calibrate { calibrate: CalibrateCommand::Envelope { tests, out } } => calibrate::envelope(tests, out),
         Command::Calibrate { calibrate: CalibrateCommand::Mcc { isotropic, critical, base, out } } => {
             calibrate::mcc(isotropic, critical, base, out)
         }
