@@ -2,7 +2,7 @@
 //! without a jump, a wheel run gives the full-domain drawbar pull, torque and sinkage, a scene
 //! without FSI bodies stays awake everywhere, and the wgpu backend refuses what it cannot do.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 

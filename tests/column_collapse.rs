@@ -5,7 +5,7 @@
 //! Also checks what must hold in any collapse: mass conserved exactly, nothing escapes, no NaN,
 //! and cohesionless soil never carries tension.
 
-mod common;
+use crate::common;
 
 use regolith::run::{RunOptions, run_scene};
 

@@ -4,7 +4,7 @@
 //! negative of its partner. Both kernels, f32 and f64. Cohesionless soil never goes into
 //! tension.
 
-mod common;
+use crate::common;
 
 use regolith::build::build_soil;
 use regolith::fsi::Real;

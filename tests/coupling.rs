@@ -2,7 +2,7 @@
 //! behaviour, and rigid bodies without markers behaving exactly as in rapier. (The hard cases
 //! are the stability suite's: `examples/hard/`, `regolith study stability`.)
 
-mod common;
+use crate::common;
 
 use regolith::run::{RunOptions, run_scene};
 use regolith::sim::Simulation;

@@ -3,7 +3,7 @@
 //! touching walls are in contact, not free. Detached particles carry no stress; in the `zero`
 //! mode flagged particles carry none either, in the default `keep` mode they keep theirs.
 
-mod common;
+use crate::common;
 
 use regolith::build::build_soil;
 

@@ -1,7 +1,7 @@
 //! A bed at rest under gravity keeps its geostatic state: σv = ρ g depth and σh = K0 σv, the
 //! soil does not move and nothing leaves the container.
 
-mod common;
+use crate::common;
 
 use regolith::build::build_soil;
 use regolith::fsi::Real;

@@ -2,7 +2,7 @@
 //! frames so far, `summary.json` — and exits with code 130. (A test binary of its own: the stop
 //! request is process-wide.)
 
-mod common;
+use crate::common;
 
 use std::time::{Duration, Instant};
 

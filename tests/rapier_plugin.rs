@@ -1,7 +1,7 @@
 //! The rapier plugin (`RapierSoil` over a world the caller owns) gives the same body trajectory
 //! as the scene runner on the equivalent scene file, to round-off.
 
-mod common;
+use crate::common;
 #[path = "../examples/rapier_plugin.rs"]
 mod example;
 

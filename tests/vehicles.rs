@@ -3,7 +3,7 @@
 //! weight, drives forward with a slip in (0, 1) and skid-steers; on rigid ground the import
 //! behaves as the same rover built by hand in plain rapier.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

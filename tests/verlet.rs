@@ -7,7 +7,7 @@
 //! f64 (where the two runs agree to round-off) and f32, and on a box pushed through the soil
 //! (moving body markers).
 
-mod common;
+use crate::common;
 
 use regolith::build::build_soil;
 use regolith::fsi::Real;

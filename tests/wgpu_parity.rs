@@ -11,7 +11,7 @@
 //!   (runout within 2 %), plate sinkage (force–sinkage curve within 3 %).
 #![cfg(feature = "wgpu")]
 
-mod common;
+use crate::common;
 
 use rand::{Rng, SeedableRng};
 use regolith::build::backend::device;
