@@ -33,7 +33,8 @@ cargo clippy --release --workspace --all-targets -- -D warnings
 cargo check --release -p regolith --lib --no-default-features
 cargo check --release -p regolith --lib --no-default-features --features wgpu
 # The API docs build without a broken link or an undocumented public item.
-RUSTDOCFLAGS="-D warnings -D missing_docs" cargo doc --workspace --no-deps
+# (--release: the proc macros and build scripts the release builds above made are reused.)
+RUSTDOCFLAGS="-D warnings -D missing_docs" cargo doc --release --workspace --no-deps
 cargo test --release --workspace --all-targets
 cargo test --release --workspace --doc
 # The stability suite at CI size: the hard cases of examples/hard/ within their [[expect]]
