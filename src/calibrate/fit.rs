@@ -38,12 +38,24 @@ pub enum FitError {
         /// Points needed.
         need: usize,
     },
+    /// The x and y of a fit have different lengths.
+    #[error("{x} x values against {y} y values; a fit needs one y per x")]
+    LengthMismatch {
+        /// x values given.
+        x: usize,
+        /// y values given.
+        y: usize,
+    },
     /// All x values are equal: no slope is defined.
     #[error("all x values are equal, so no slope can be fitted")]
     Degenerate,
     /// The envelope is not a Mohr–Coulomb line of this material class.
     #[error("{0}")]
     NotMohrCoulomb(String),
+}
+
+fn same_length(x: &[f64], y: &[f64]) -> Result<(), FitError> {
+    if x.len() == y.len() { Ok(()) } else { Err(FitError::LengthMismatch { x: x.len(), y: y.len() }) }
 }
 
 fn mean(v: impl Iterator<Item = f64> + Clone) -> f64 {
@@ -53,7 +65,7 @@ fn mean(v: impl Iterator<Item = f64> + Clone) -> f64 {
 
 /// Ordinary least squares of `y` on `x`.
 pub fn line(x: &[f64], y: &[f64]) -> Result<Line, FitError> {
-    assert_eq!(x.len(), y.len(), "x and y of one fit have the same length");
+    same_length(x, y)?;
     let n = x.len();
     if n < 2 {
         return Err(FitError::TooFewPoints { got: n, need: 2 });
@@ -92,7 +104,7 @@ pub struct Proportional {
 
 /// Least squares of `y = b x`.
 pub fn proportional(x: &[f64], y: &[f64]) -> Result<Proportional, FitError> {
-    assert_eq!(x.len(), y.len(), "x and y of one fit have the same length");
+    same_length(x, y)?;
     let n = x.len();
     if n < 1 {
         return Err(FitError::TooFewPoints { got: n, need: 1 });
@@ -111,6 +123,9 @@ pub fn proportional(x: &[f64], y: &[f64]) -> Result<Proportional, FitError> {
 /// lines of several unloading branches). Returns the slope, its standard error and the
 /// intercept of each group.
 pub fn common_slope(groups: &[(Vec<f64>, Vec<f64>)]) -> Result<(f64, Option<f64>, Vec<f64>), FitError> {
+    for (x, y) in groups {
+        same_length(x, y)?;
+    }
     let n: usize = groups.iter().map(|g| g.0.len()).sum();
     let k = groups.len();
     if groups.iter().any(|g| g.0.len() < 2) || n < 2 {
@@ -160,6 +175,7 @@ pub struct MohrCoulomb {
 /// squares line of t on s, then `sin φ = slope`, `c = intercept / cos φ`, with standard errors
 /// carried through by the delta method (with the intercept–slope covariance).
 pub fn mohr_coulomb(sigma3: &[f64], sigma1: &[f64]) -> Result<MohrCoulomb, FitError> {
+    same_length(sigma3, sigma1)?;
     let s: Vec<f64> = sigma3.iter().zip(sigma1).map(|(a, b)| 0.5 * (a + b)).collect();
     let t: Vec<f64> = sigma3.iter().zip(sigma1).map(|(a, b)| 0.5 * (b - a)).collect();
     let l = line(&s, &t)?;
@@ -258,6 +274,15 @@ mod tests {
         let (sd_c, sd_phi) = (sd(&cs), sd(&phis));
         assert!((se_c / sd_c - 1.0).abs() < 0.2, "se(c) {se_c} against a spread of {sd_c}");
         assert!((se_phi / sd_phi - 1.0).abs() < 0.2, "se(φ) {se_phi} against a spread of {sd_phi}");
+    }
+
+    #[test]
+    fn mismatched_lengths_are_errors_not_panics() {
+        let e = FitError::LengthMismatch { x: 3, y: 2 };
+        assert_eq!(line(&[1.0, 2.0, 3.0], &[1.0, 2.0]), Err(e.clone()));
+        assert_eq!(proportional(&[1.0, 2.0, 3.0], &[1.0, 2.0]), Err(e.clone()));
+        assert_eq!(mohr_coulomb(&[1.0, 2.0, 3.0], &[4.0, 5.0]), Err(e.clone()));
+        assert_eq!(common_slope(&[(vec![1.0, 2.0, 3.0], vec![1.0, 2.0])]), Err(e));
     }
 
     #[test]
