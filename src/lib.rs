@@ -18,7 +18,8 @@
 //! 11. [`calibrate`]: soil parameters from measurements (MCC from lab data, fits with
 //!     standard errors, the Mohr–Coulomb envelope);
 //! 12. [`error`]: the facade [`Error`] over every stage's error type;
-//! 13. [`bench`](mod@bench), [`cli`]: the benchmark and the command-line tool.
+//! 13. [`sweep`]: one scene at many points (grid or Latin hypercube), resumable, in shards;
+//! 14. [`bench`](mod@bench), [`cli`]: the benchmark and the command-line tool.
 //!
 //! `tests/architecture.rs` fails on an import against this order.
 //!
@@ -43,6 +44,7 @@ pub mod run;
 pub mod scene;
 pub mod sim;
 pub mod study;
+pub mod sweep;
 
 pub use error::Error;
 pub use regolith_body as body;

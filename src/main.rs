@@ -37,6 +37,7 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::from(1)
         }
+        Err(Failure::Reported(code)) => ExitCode::from(code),
         Err(Failure::Interrupted(m)) => {
             eprintln!("{m}");
             ExitCode::from(130)

@@ -47,7 +47,7 @@ pub fn place_on_host<T: Real, S: SphSolver<T> + ?Sized>(
 }
 
 /// A soil solver.
-pub trait SphSolver<T: Real> {
+pub trait SphSolver<T: Real>: Send {
     /// `"cpu"` or `"wgpu"`.
     fn backend(&self) -> &'static str;
     /// The device it runs on (`"cpu"` for the CPU backend).

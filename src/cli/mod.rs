@@ -8,6 +8,7 @@ mod element;
 mod inspect;
 mod run;
 mod study;
+mod sweep;
 
 use std::path::PathBuf;
 
@@ -24,6 +25,8 @@ pub enum Failure {
     Run(anyhow::Error),
     /// Ctrl-C stopped the run after writing its outputs: exit code 130.
     Interrupted(String),
+    /// A child process (the Ray sweep runner) already printed its error: exit with its code.
+    Reported(u8),
 }
 
 impl From<InputError> for Failure {
@@ -175,9 +178,102 @@ pub enum CalibrateCommand {
     },
 }
 
+/// Sweep subcommands.
+#[derive(Debug, Subcommand)]
+pub enum SweepCommand {
+    /// Join a sweep directory's shard files (results.shard-I-of-N.jsonl) into results.jsonl
+    /// and results.csv.
+    Merge {
+        /// The sweep's output directory.
+        dir: PathBuf,
+    },
+}
+
+/// How a sweep's points are run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RunnerArg {
+    /// One Ray task per point (a local Ray instance, or the cluster at --address); needs
+    /// Python with the regolith package and ray.
+    Ray,
+    /// --jobs points at a time on threads of this process.
+    Threads,
+}
+
+/// How a sweep combines its varied keys.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum DesignArg {
+    /// Every combination of the listed values.
+    Grid,
+    /// A Latin hypercube of --samples points.
+    Lhs,
+}
+
+/// `regolith sweep SCENE ...`.
+#[derive(Debug, clap::Args)]
+pub struct SweepArgs {
+    /// Scene file (TOML).
+    pub scene: Option<PathBuf>,
+    /// A varied key and its values: `KEY=a,b,c` (TOML values) or `KEY=lo:hi` (a range, for
+    /// --design lhs). Repeatable; a grid crosses them, the first varying slowest.
+    #[arg(long, value_name = "KEY=VALUES")]
+    pub vary: Vec<String>,
+    /// Override a scene key at every point, e.g. `--set output.mcap=false` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Grid or Latin hypercube.
+    #[arg(long, value_enum, default_value_t = DesignArg::Grid)]
+    pub design: DesignArg,
+    /// Points of a Latin hypercube.
+    #[arg(long, value_name = "N")]
+    pub samples: Option<usize>,
+    /// Seed of the Latin hypercube.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+    /// Ray tasks or threads of this process.
+    #[arg(long, value_enum, default_value_t = RunnerArg::Ray)]
+    pub runner: RunnerArg,
+    /// Ray cluster to join (`auto`, `ray://host:10001`); default: start a local instance.
+    #[arg(long, value_name = "ADDRESS")]
+    pub address: Option<String>,
+    /// CPUs per point (Ray).
+    #[arg(long, value_name = "N")]
+    pub num_cpus: Option<f64>,
+    /// GPUs per point (Ray).
+    #[arg(long, value_name = "N")]
+    pub num_gpus: Option<f64>,
+    /// Points run at once (threads).
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Run only shard i of n (points p with p % n = i − 1); default inside a SLURM array job:
+    /// the task's (SLURM_ARRAY_TASK_ID, SLURM_ARRAY_TASK_COUNT).
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<String>,
+    /// Run again the points recorded as failed.
+    #[arg(long)]
+    pub retry_failed: bool,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/sweep")]
+    pub out: PathBuf,
+    /// No progress lines.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Run one scene at many points (`--vary KEY=VALUES`, a grid or a Latin hypercube) on Ray
+    /// or threads, resumable, in shards for SLURM arrays: results.jsonl, results.csv and each
+    /// point's outputs under points/<id>/. `regolith sweep merge DIR` joins shards.
+    #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+    Sweep {
+        /// `merge`.
+        #[command(subcommand)]
+        sub: Option<SweepCommand>,
+        /// The sweep.
+        #[command(flatten)]
+        args: SweepArgs,
+    },
     /// Soil parameters from measurements: `mcc` (Modified Cam Clay from lab data), `envelope`
     /// (c and φ from triaxial failure stresses).
     Calibrate {
@@ -368,6 +464,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             run::run(&scene, out.as_deref(), backend, precision, &sets, quiet)
         }
         Command::Inspect { recording } => inspect::run(&recording),
+        Command::Sweep { sub: Some(SweepCommand::Merge { dir }), .. } => sweep::merge(&dir),
+        Command::Sweep { sub: None, args } => sweep::run(args),
         Command::Calibrate { calibrate: CalibrateCommand::Envelope { tests, out } } => calibrate::envelope(tests, out),
         Command::Calibrate { calibrate: CalibrateCommand::Mcc { isotropic, critical, base, out } } => {
             calibrate::mcc(isotropic, critical, base, out)

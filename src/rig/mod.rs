@@ -50,7 +50,7 @@ fn footprint(shape: &ShapeDesc) -> f64 {
 }
 
 /// Places body `i` so its lowest point is one spacing above the soil top; returns that height.
-fn place_on_soil(scene: &mut Scene, i: usize) -> Result<f64, BuildError> {
+pub fn place_on_soil(scene: &mut Scene, i: usize) -> Result<f64, BuildError> {
     let d0 = scene.solver.spacing;
     let b = &scene.bodies[i].desc;
     let [x, y, _] = b.pose.translation;

@@ -38,7 +38,7 @@
 mod body;
 mod file;
 mod output;
-mod overrides;
+pub mod overrides;
 mod plan;
 mod rig;
 mod settings;

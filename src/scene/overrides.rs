@@ -11,12 +11,37 @@ pub fn parse_set(arg: &str) -> Result<(String, toml::Value), String> {
     if k.is_empty() {
         return Err(format!("`{arg}` has an empty key"));
     }
-    let v = v.trim();
-    let value = match toml::from_str::<toml::Table>(&format!("v = {v}")) {
+    Ok((k.to_string(), parse_value(v.trim())))
+}
+
+/// A value as `--set` and `--vary` take it: TOML (`0.5`, `"f32"`, `[0, 0, -1.62]`), or a bare
+/// word that is not valid TOML taken as a string.
+pub fn parse_value(v: &str) -> toml::Value {
+    match toml::from_str::<toml::Table>(&format!("v = {v}")) {
         Ok(mut t) => t.remove("v").unwrap_or(toml::Value::String(v.to_string())),
         Err(_) => toml::Value::String(v.to_string()),
-    };
-    Ok((k.to_string(), value))
+    }
+}
+
+/// The value at a dotted key of a scene table (`rig.slips`, `materials[0].density`), if any.
+pub fn get<'a>(table: &'a toml::Table, key: &str) -> Option<&'a toml::Value> {
+    let mut cur: Option<&toml::Value> = None;
+    for part in key.split('.') {
+        let (name, index) = match part.find('[') {
+            Some(b) => (&part[..b], part[b + 1..].strip_suffix(']').and_then(|s| s.parse::<usize>().ok())),
+            None => (part, None),
+        };
+        let t = match cur {
+            None => table,
+            Some(v) => v.as_table()?,
+        };
+        let v = t.get(name)?;
+        cur = Some(match index {
+            Some(i) => v.as_array()?.get(i)?,
+            None => v,
+        });
+    }
+    cur
 }
 
 /// Sets `key` in `table`, creating intermediate tables as needed.

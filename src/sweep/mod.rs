@@ -1,0 +1,324 @@
+//! Sweeps: one scene run at many points (`--vary key=values`), each point's summary recorded,
+//! resumable, sliceable into shards for SLURM arrays. The points, their configuration hashes,
+//! how one point runs and how results are written live here; the runners — in-process threads
+//! ([`run_local`]) or Ray tasks (the Python package's `regolith.sweep`) — only schedule them.
+//!
+//! Layout of a sweep directory: `results.jsonl` (or `results.shard-I-of-N.jsonl`, one line
+//! per finished point, see [`Record`]), `results.csv` (the tidy table), and
+//! `points/<id>/` with each point's own `summary.json`, `series.csv` and plots.
+
+mod design;
+mod results;
+
+pub use design::{Design, Values, Vary, parse_vary, points};
+pub use results::{MAX_ARRAY_COLUMNS, Record, Shard, append, merge, read_all, results_file, write_csv};
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use crate::input::{InputError, read_text};
+use crate::run::{RunOptions, run_scene};
+use crate::scene::{load_scene_source, overrides};
+
+/// One point of a sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    /// Position in the sweep (0-based).
+    pub index: usize,
+    /// Configuration hash: FNV-1a (64 bit, hex) of the scene file's text and the point's
+    /// overrides (key and TOML value, in order). The same scene text and overrides give the
+    /// same id on every machine; files the scene refers to (materials, URDF) are not hashed.
+    pub id: String,
+    /// The overrides, applied in order after the sweep's `--set` ones (which they include).
+    pub overrides: Vec<(String, toml::Value)>,
+}
+
+/// A sweep's points for one scene.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Its text, as hashed and run.
+    pub source: String,
+    /// The points, in order.
+    pub points: Vec<Point>,
+}
+
+impl Plan {
+    /// The points of `design` over `vary`, each after the common overrides `sets`. A scalar
+    /// given for a key that holds an array in the scene (`--vary rig.slips=0,0.2`) stands for
+    /// the one-element array (`rig.slips = [0.2]`). The scene file must read as TOML; each
+    /// point's scene is validated when it runs, and a point with a bad value is recorded as
+    /// failed with the one-line error while the others go on.
+    pub fn new(
+        scene: &Path,
+        sets: &[(String, toml::Value)],
+        vary: &[Vary],
+        design: Design,
+    ) -> Result<Self, InputError> {
+        let source = read_text(scene)?;
+        let table: toml::Table = crate::input::parse_toml(scene, &source)?;
+        for v in vary {
+            if sets.iter().any(|(k, _)| *k == v.key) {
+                return Err(InputError::flag("--vary", format!("{} is both --set and --vary", v.key)));
+            }
+        }
+        let points = points(vary, design)?
+            .into_iter()
+            .enumerate()
+            .map(|(index, varied)| {
+                let mut o: Vec<(String, toml::Value)> = sets.to_vec();
+                for (k, v) in varied {
+                    let v = match (overrides::get(&table, &k), v) {
+                        (Some(toml::Value::Array(_)), v @ toml::Value::Array(_)) => v,
+                        (Some(toml::Value::Array(_)), v) => toml::Value::Array(vec![v]),
+                        (_, v) => v,
+                    };
+                    o.push((k, v));
+                }
+                Point { index, id: config_hash(&source, &o), overrides: o }
+            })
+            .collect();
+        Ok(Self { scene: scene.to_path_buf(), source, points })
+    }
+
+    /// Runs point `p`, writing its outputs under `out/points/<id>/`. Never fails: a bad value
+    /// or a failed run is the record's `error`.
+    pub fn run_point(&self, p: &Point, out: &Path) -> Record {
+        let t0 = Instant::now();
+        let dir = Path::new("points").join(&p.id);
+        let mut rec = Record {
+            point: p.index,
+            id: p.id.clone(),
+            status: "failed".into(),
+            overrides: p.overrides.iter().map(|(k, v)| (k.clone(), toml_to_json(v))).collect::<BTreeMap<_, _>>(),
+            wall_s: 0.0,
+            error: None,
+            out: dir.display().to_string(),
+            summary: None,
+        };
+        match load_scene_source(&self.scene, &self.source, &p.overrides) {
+            Err(e) => rec.error = Some(e.to_string()),
+            Ok(mut scene) => {
+                let dir = out.join(&dir);
+                if let Err(m) = crate::build::backend::resolve_backend(&mut scene) {
+                    rec.error = Some(format!("simulation.backend: {m}"));
+                    rec.wall_s = t0.elapsed().as_secs_f64();
+                    return rec;
+                }
+                match run_scene(&scene, &RunOptions::quiet(&dir)) {
+                    Ok(s) => {
+                        rec.status = "ok".into();
+                        rec.summary = serde_json::to_value(&s).ok();
+                    }
+                    Err(e) => {
+                        rec.error = Some(crate::error::report(&e));
+                        // A run that failed after it started wrote its summary.
+                        rec.summary = std::fs::read_to_string(dir.join("summary.json"))
+                            .ok()
+                            .and_then(|t| serde_json::from_str(&t).ok());
+                    }
+                }
+            }
+        }
+        rec.wall_s = t0.elapsed().as_secs_f64();
+        rec
+    }
+
+    /// The points of `shard` (all without one) that `done` does not hold: those without a
+    /// record, and the failed ones when `retry_failed`.
+    pub fn pending(&self, shard: Option<Shard>, done: &[Record], retry_failed: bool) -> Vec<Point> {
+        let finished: BTreeMap<&str, bool> = done.iter().map(|r| (r.id.as_str(), r.ok())).collect();
+        self.points
+            .iter()
+            .filter(|p| shard.is_none_or(|s| s.holds(p.index)))
+            .filter(|p| match finished.get(p.id.as_str()) {
+                Some(true) => false,
+                Some(false) => retry_failed,
+                None => true,
+            })
+            .cloned()
+            .collect()
+    }
+}
+
+/// FNV-1a, 64 bit, of the scene text and the overrides.
+fn config_hash(source: &str, overrides: &[(String, toml::Value)]) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for b in bytes {
+            h ^= u64::from(*b);
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    eat(source.as_bytes());
+    for (k, v) in overrides {
+        eat(b"\0");
+        eat(k.as_bytes());
+        eat(b"=");
+        eat(v.to_string().as_bytes());
+    }
+    format!("{h:016x}")
+}
+
+/// A TOML value as JSON.
+pub fn toml_to_json(v: &toml::Value) -> serde_json::Value {
+    match v {
+        toml::Value::String(s) => s.clone().into(),
+        toml::Value::Integer(i) => (*i).into(),
+        toml::Value::Float(f) => serde_json::Number::from_f64(*f).map_or(serde_json::Value::Null, Into::into),
+        toml::Value::Boolean(b) => (*b).into(),
+        toml::Value::Datetime(d) => d.to_string().into(),
+        toml::Value::Array(a) => a.iter().map(toml_to_json).collect::<Vec<_>>().into(),
+        toml::Value::Table(t) => {
+            t.iter().map(|(k, v)| (k.clone(), toml_to_json(v))).collect::<serde_json::Map<_, _>>().into()
+        }
+    }
+}
+
+/// What a runner did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Outcome {
+    /// Points of this shard in the sweep.
+    pub points: usize,
+    /// Already recorded, so not run.
+    pub skipped: usize,
+    /// Run now and finished.
+    pub ok: usize,
+    /// Run now and failed.
+    pub failed: usize,
+}
+
+/// Runs a sweep's pending points on `jobs` threads of this process, appending each record as
+/// it finishes, then writes `results.csv` (unsharded runs; shards are joined by [`merge`]).
+/// Progress lines go to stderr unless `quiet`.
+pub fn run_local(
+    plan: &Plan,
+    out: &Path,
+    shard: Option<Shard>,
+    jobs: usize,
+    retry_failed: bool,
+    quiet: bool,
+) -> Result<Outcome, InputError> {
+    std::fs::create_dir_all(out).map_err(|e| InputError::file(out, format!("cannot create: {e}")))?;
+    let done = read_all(out)?;
+    let pending = plan.pending(shard, &done, retry_failed);
+    let points = plan.points.iter().filter(|p| shard.is_none_or(|s| s.holds(p.index))).count();
+    let mut outcome = Outcome { points, skipped: points - pending.len(), ..Outcome::default() };
+    if !quiet {
+        eprintln!(
+            "sweep: {} points{}, {} already recorded, {} to run on {} thread(s)",
+            points,
+            shard.map(|s| format!(" in shard {}/{}", s.index, s.count)).unwrap_or_default(),
+            outcome.skipped,
+            pending.len(),
+            jobs.max(1)
+        );
+    }
+    let file = results_file(out, shard);
+    let next = AtomicUsize::new(0);
+    let state = Mutex::new((Progress::new(pending.len(), jobs.max(1)), Ok::<(), InputError>(())));
+    std::thread::scope(|s| {
+        for _ in 0..jobs.max(1).min(pending.len().max(1)) {
+            s.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(p) = pending.get(i) else { break };
+                    if let Ok(mut g) = state.lock() {
+                        g.0.running += 1;
+                    }
+                    let rec = plan.run_point(p, out);
+                    let Ok(mut g) = state.lock() else { break };
+                    let written = append(&file, &rec);
+                    if let Err(e) = written {
+                        g.1 = Err(e);
+                    }
+                    g.0.finish(&rec);
+                    if !quiet {
+                        eprintln!("{}", g.0.line(&rec));
+                    }
+                }
+            });
+        }
+    });
+    let (progress, written) = state.into_inner().map_err(|_| InputError::file(&file, "a sweep thread panicked"))?;
+    written?;
+    outcome.ok = progress.ok;
+    outcome.failed = progress.failed;
+    if shard.is_none() {
+        write_csv(out, &read_all(out)?)?;
+    }
+    Ok(outcome)
+}
+
+/// Points done, running and failed, and the time left at the pace so far.
+struct Progress {
+    total: usize,
+    jobs: usize,
+    ok: usize,
+    failed: usize,
+    running: usize,
+    started: Instant,
+}
+
+impl Progress {
+    fn new(total: usize, jobs: usize) -> Self {
+        Self { total, jobs, ok: 0, failed: 0, running: 0, started: Instant::now() }
+    }
+
+    fn finish(&mut self, r: &Record) {
+        self.running = self.running.saturating_sub(1);
+        if r.ok() { self.ok += 1 } else { self.failed += 1 }
+    }
+
+    fn line(&self, r: &Record) -> String {
+        let done = self.ok + self.failed;
+        let left = self.total - done;
+        let eta = self.started.elapsed().as_secs_f64() / done.max(1) as f64 * left as f64 / self.jobs as f64;
+        let what = match &r.error {
+            None => "ok".to_string(),
+            Some(e) => format!("FAILED: {e}"),
+        };
+        format!(
+            "sweep: point {} ({}) {what} in {:.1} s; {done}/{} done, {} running, {} failed, ETA {}",
+            r.point,
+            r.id,
+            r.wall_s,
+            self.total,
+            self.running,
+            self.failed,
+            eta_text(if left == 0 { 0.0 } else { eta })
+        )
+    }
+}
+
+/// `1h 02m`, `3m 20s` or `12 s`.
+pub fn eta_text(s: f64) -> String {
+    let s = s.max(0.0).round() as u64;
+    if s >= 3600 {
+        format!("{}h {:02}m", s / 3600, (s % 3600) / 60)
+    } else if s >= 60 {
+        format!("{}m {:02}s", s / 60, s % 60)
+    } else {
+        format!("{s} s")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hash_depends_on_text_and_overrides_only() {
+        let o = vec![("a.b".to_string(), toml::Value::Float(0.5))];
+        assert_eq!(config_hash("x = 1", &o), config_hash("x = 1", &o.clone()));
+        assert_ne!(config_hash("x = 1", &o), config_hash("x = 2", &o));
+        assert_ne!(config_hash("x = 1", &o), config_hash("x = 1", &[("a.b".into(), toml::Value::Float(0.25))]));
+        assert_eq!(config_hash("", &[]), "cbf29ce484222325", "FNV-1a offset basis");
+        assert_eq!(eta_text(3725.0), "1h 02m");
+        assert_eq!(eta_text(200.0), "3m 20s");
+    }
+}
