@@ -2,7 +2,9 @@
 # Runs every test of the Regolith workspace, in release mode, on a fresh machine.
 #
 # Installs what the tests need when it is missing: Mesa's software Vulkan driver (lavapipe),
-# so that the wgpu tests run on a machine without a GPU. Needs root or sudo for that step only.
+# so that the wgpu tests run on a machine without a GPU (needs root or sudo for that step
+# only), and a Python virtual environment under the project (.venv) with maturin, pytest,
+# numpy and ray for the Python package's tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -26,6 +28,19 @@ fi
 # Mesa's Vulkan loader warns on every device open without a runtime dir; give it one.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 
+# The Python package's tests need a virtual environment with maturin (to build the wheel),
+# pytest, numpy and ray: made under the project (.venv) when missing.
+VENV="${REGOLITH_VENV:-.venv}"
+PY_DEPS=("maturin>=1.16,<2" "pytest>=9,<10" "numpy>=1.21,<3" "ray>=2.60,<3")
+if [ ! -x "$VENV/bin/python" ]; then
+    echo "test.sh: creating the Python virtual environment $VENV"
+    python3 -m venv "$VENV"
+fi
+if ! "$VENV/bin/python" -c "import maturin, pytest, numpy, ray" 2>/dev/null; then
+    echo "test.sh: installing ${PY_DEPS[*]} into $VENV"
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check "${PY_DEPS[@]}"
+fi
+
 cargo fmt --all -- --check
 # Lints (missing docs included: the workspace lints make it a warning, -D warnings an error).
 cargo clippy --release --workspace --all-targets -- -D warnings
@@ -35,8 +50,13 @@ cargo check --release -p regolith --lib --no-default-features --features wgpu
 # The API docs build without a broken link or an undocumented public item.
 # (--release: the proc macros and build scripts the release builds above made are reused.)
 RUSTDOCFLAGS="-D warnings -D missing_docs" cargo doc --release --workspace --no-deps
-cargo test --release --workspace --all-targets
-cargo test --release --workspace --doc
+# (The Python bindings crate has no Rust tests: pytest tests it below.)
+cargo test --release --workspace --all-targets --exclude regolith-python
+cargo test --release --workspace --doc --exclude regolith-python
+# The Python package: installed as a user installs it (pip builds the abi3 wheel with
+# maturin, into the same target folder), then its tests, which also drive the CLI binary.
+PATH="$(cd "$VENV" && pwd)/bin:$PATH" "$VENV/bin/python" -m pip install -q --disable-pip-version-check --no-build-isolation ./python
+"$VENV/bin/python" -m pytest -q python/tests
 # The stability suite at CI size: the hard cases of examples/hard/ within their [[expect]]
 # bounds. thin_grousers and wheel_full_slip pass at CI size too but take about 2 minutes each
 # on 2 cores; they run with `regolith study stability` (docs/stability.md), not here, until the

@@ -1,0 +1,153 @@
+"""Sweeps: on a local Ray instance (from Python and from the CLI), resumed after a kill, with a
+failed point, and in SLURM-style shards merged."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+import regolith.sweep
+
+# A single-wheel slip sweep sized to about 2 s a point on 2 cores.
+SMALL = {"sph.spacing": 0.02, "simulation.end_time": 0.1, "output.every": 0.1}
+SLIPS = [0.0, 0.2, 0.4, 0.6]
+
+
+def _sets():
+    return [f"{k}={regolith.sweep.toml_literal(v)}" for k, v in SMALL.items()]
+
+
+def _lines(path):
+    if not path.exists():
+        return []
+    return [json.loads(l) for l in path.read_text().splitlines() if l.strip()]
+
+
+def test_slip_sweep_on_local_ray_writes_one_row_per_point(scenes, tmp_path):
+    rows = regolith.sweep.run(
+        scenes / "single_wheel.toml",
+        vary={"rig.slips": SLIPS},
+        sets=SMALL,
+        out=tmp_path,
+        runner="ray",
+        num_cpus=1,
+        quiet=True,
+    )
+    assert [r["status"] for r in rows] == ["ok"] * 4
+    assert [r["overrides"]["rig.slips"] for r in rows] == [[s] for s in SLIPS]
+    csv = (tmp_path / "results.csv").read_text().splitlines()
+    assert len(csv) == 1 + 4
+    header = csv[0].split(",")
+    assert {"point", "id", "status", "set:rig.slips", "wall_s", "error"} <= set(header)
+    # The rig's per-slip result is a column of the tidy table.
+    assert any(h.startswith("rig.") for h in header)
+    for r in rows:
+        assert (tmp_path / r["out"] / "summary.json").exists()
+        assert r["summary"]["rig"]["type"] == "wheel"
+
+
+def test_a_killed_sweep_resumes_with_the_points_not_recorded(scenes, tmp_path):
+    args = [sys.executable, "-m", "regolith.sweep", str(scenes / "single_wheel.toml"), "--out", str(tmp_path)]
+    args += ["--vary", "rig.slips=" + ",".join(map(str, SLIPS)), "--num-cpus", "1"]
+    for s in _sets():
+        args += ["--set", s]
+    first = subprocess.Popen(args, stderr=subprocess.PIPE, text=True)
+    results = tmp_path / "results.jsonl"
+    deadline = time.monotonic() + 240
+    while len(_lines(results)) < 2 and time.monotonic() < deadline and first.poll() is None:
+        time.sleep(0.05)
+    first.send_signal(signal.SIGINT)
+    _, err1 = first.communicate(timeout=120)
+    done = len(_lines(results))
+    assert 2 <= done < 4, f"killed after {done} points: {err1[-2000:]}"
+    second = subprocess.run(args, capture_output=True, text=True, timeout=300)
+    assert second.returncode == 0, second.stderr[-2000:]
+    assert f"{done} already recorded, {4 - done} to run" in second.stderr
+    recs = _lines(results)
+    assert len(recs) == 4, "each point recorded once"
+    assert sorted(r["point"] for r in recs) == [0, 1, 2, 3]
+    assert len((tmp_path / "results.csv").read_text().splitlines()) == 5
+
+
+def test_cli_runs_a_ray_sweep_and_records_a_bad_point_as_failed(cli, scenes, tmp_path):
+    """From the CLI on Ray: a point with a spacing that does not validate is recorded with the
+    one-line error; the other point finishes; the exit code says a point failed."""
+    env = {**os.environ, "REGOLITH_PYTHON": sys.executable}
+    sets = [a for s in _sets() if not s.startswith("sph.spacing") for a in ("--set", s)]
+    r = cli(
+        "sweep", scenes / "single_wheel.toml", "--vary", "sph.spacing=0.02,-1", "--vary", "rig.slips=0.2",
+        *sets, "--num-cpus", "1", "--out", tmp_path, "--quiet", check=False, env=env,
+    )
+    assert r.returncode == 1, r.stderr
+    recs = regolith.sweep.records(tmp_path)
+    assert [x["status"] for x in recs] == ["ok", "failed"]
+    assert "sph.spacing" in recs[1]["error"] and "must be > 0" in recs[1]["error"]
+    assert "\n" not in recs[1]["error"]
+    assert "1 failed" in r.stdout
+
+
+def _comparable(rec):
+    """A record without what depends on the clock or the output folder."""
+    rec = dict(rec)
+    rec.pop("wall_s")
+    s = dict(rec.pop("summary"))
+    for k in ("wall_time_s", "particle_steps_per_s", "outputs", "scene"):
+        s.pop(k, None)
+    rec["summary"] = s
+    return rec
+
+
+def test_shards_merged_equal_the_unsharded_sweep(cli, scenes, tmp_path):
+    common = [scenes / "single_wheel.toml", "--vary", "rig.slips=" + ",".join(map(str, SLIPS[:3]))]
+    common += [a for s in _sets() for a in ("--set", s)] + ["--runner", "threads", "--quiet"]
+    cli("sweep", *common, "--jobs", "2", "--out", tmp_path / "whole")
+    for i in (1, 2):
+        cli("sweep", *common, "--shard", f"{i}/2", "--out", tmp_path / "sharded")
+    assert not (tmp_path / "sharded" / "results.csv").exists(), "shards write only their own records"
+    assert len(_lines(tmp_path / "sharded" / "results.shard-1-of-2.jsonl")) == 2
+    assert len(_lines(tmp_path / "sharded" / "results.shard-2-of-2.jsonl")) == 1
+    r = cli("sweep", "merge", tmp_path / "sharded")
+    assert "merged 3 points" in r.stdout
+    whole = [_comparable(x) for x in regolith.sweep.records(tmp_path / "whole")]
+    merged = [_comparable(x) for x in _lines(tmp_path / "sharded" / "results.jsonl")]
+    assert merged == whole
+    strip = lambda p: [",".join(c for i, c in enumerate(l.split(",")) if i not in drop) for l in p.read_text().splitlines()]
+    header = (tmp_path / "whole" / "results.csv").read_text().splitlines()[0].split(",")
+    drop = {i for i, h in enumerate(header) if h in ("wall_s", "wall_time_s", "particle_steps_per_s", "scene")}
+    assert strip(tmp_path / "sharded" / "results.csv") == strip(tmp_path / "whole" / "results.csv")
+
+
+def test_slurm_array_environment_picks_the_shard(cli, scenes, tmp_path):
+    common = [scenes / "single_wheel.toml", "--vary", "rig.slips=0.0,0.2,0.4"]
+    common += [a for s in _sets() for a in ("--set", s)] + ["--runner", "threads", "--quiet", "--out", tmp_path]
+    env = {**os.environ, "SLURM_ARRAY_TASK_ID": "3", "SLURM_ARRAY_TASK_COUNT": "3", "SLURM_ARRAY_TASK_MIN": "1"}
+    cli("sweep", *common, env=env)
+    recs = _lines(tmp_path / "results.shard-3-of-3.jsonl")
+    assert [r["point"] for r in recs] == [2]
+    bad = cli("sweep", *common, "--shard", "4/3", check=False)
+    assert bad.returncode == 2 and bad.stderr.startswith("error: --shard: `4/3`")
+
+
+def test_the_python_examples_run(tmp_path):
+    """examples/python/: the cone probe (push, hold, withdraw) and the slip sweep, sized down."""
+    examples = os.path.join(os.path.dirname(__file__), "..", "..", "examples", "python")
+    r = subprocess.run(
+        [sys.executable, os.path.join(examples, "cone_probe.py"), "--spacing", "0.008", "--depth", "0.01",
+         "--hold", "0.02", "--out", str(tmp_path / "cone")],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert r.returncode == 0, r.stderr[-2000:]
+    lines = (tmp_path / "cone" / "cone_probe.csv").read_text().splitlines()
+    phases = {l.split(",")[1] for l in lines[1:]}
+    assert phases == {"push", "hold", "withdraw"}, phases
+    r = subprocess.run(
+        [sys.executable, os.path.join(examples, "wheel_slip.py"), "--slips", "0.2,0.4", "--spacing", "0.02",
+         "--end-time", "0.1", "--runner", "threads", "--out", str(tmp_path / "wheel")],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "DBP (N)" in r.stdout and len((tmp_path / "wheel" / "results.csv").read_text().splitlines()) == 3
