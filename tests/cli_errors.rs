@@ -209,3 +209,35 @@ fn calibrate_envelope_fits_c_and_phi_with_agx_field_names() {
     let one = material("tx_one.csv", "sigma3,sigma1\n5e3,2e4\n");
     assert_one_line_error(&["calibrate", "envelope", "--tests", &one, "--out", &o], "at least 2 tests");
 }
+
+#[test]
+fn sweep_flag_errors_are_one_line() {
+    let scene = "examples/scenes/single_wheel.toml";
+    let t = ["--runner", "threads"];
+    let with = |extra: &[&'static str]| [&["sweep", scene][..], extra, &t[..]].concat();
+    assert_one_line_error(&with(&[]), "--vary: a sweep needs at least one --vary key=values");
+    assert_one_line_error(&with(&["--vary", "rig.slips"]), "--vary: `rig.slips` is not key=values");
+    assert_one_line_error(&with(&["--vary", "a=1:2"]), "a grid needs listed values");
+    assert_one_line_error(&with(&["--vary", "a=1,,2"]), "a: empty value");
+    assert_one_line_error(&with(&["--vary", "a=1", "--vary", "a=2"]), "a is varied twice");
+    assert_one_line_error(&with(&["--vary", "a=1", "--set", "a=2"]), "a is both --set and --vary");
+    assert_one_line_error(&with(&["--vary", "a=1", "--design", "lhs"]), "--samples: is required with --design lhs");
+    assert_one_line_error(&with(&["--vary", "a=1", "--samples", "4"]), "--samples: applies to --design lhs only");
+    assert_one_line_error(&with(&["--vary", "a=1", "--shard", "3/2"]), "--shard: `3/2` is not i/n");
+    assert_one_line_error(&with(&["--vary", "a=1", "--num-gpus", "1"]), "--num-gpus: applies to --runner ray only");
+    assert_one_line_error(&with(&["--vary", "a=1", "--jobs", "0"]), "--jobs: must be at least 1");
+    assert_one_line_error(&["sweep", "examples/scenes/missing.toml", "--vary", "a=1"], "missing.toml: cannot read");
+    let empty = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("empty-sweep");
+    std::fs::create_dir_all(&empty).expect("tmp");
+    assert_one_line_error(&["sweep", "merge", &empty.display().to_string()], "holds no results.jsonl");
+    // The Ray runner without a Python to run it: one line saying what to do.
+    let out = Command::new(env!("CARGO_BIN_EXE_regolith"))
+        .args(["sweep", scene, "--vary", "rig.slips=0.2"])
+        .env("REGOLITH_PYTHON", "/nonexistent/python3")
+        .output()
+        .expect("run regolith");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("cannot start /nonexistent/python3") && err.contains("--runner threads"), "{err}");
+}

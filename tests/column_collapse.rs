@@ -9,8 +9,8 @@ use crate::common;
 
 use regolith::run::{RunOptions, run_scene};
 
-fn collapse(scene_file: &str, a: f64) {
-    let scene = common::example(scene_file, &[]);
+fn collapse(scene_file: &str, a: f64, sets: &[&str]) {
+    let scene = common::example(scene_file, sets);
     let out = common::out_dir(scene_file);
     let summary = run_scene(&scene, &RunOptions::quiet(out.clone())).expect("run succeeds");
     let r = summary.runout.as_ref().expect("a column scene reports its runout");
@@ -44,10 +44,12 @@ fn collapse(scene_file: &str, a: f64) {
 
 #[test]
 fn squat_column_a1_matches_lube() {
-    collapse("column_collapse.toml", 1.0);
+    collapse("column_collapse.toml", 1.0, &[]);
 }
 
 #[test]
 fn tall_column_a3_matches_lube() {
-    collapse("column_collapse_tall.toml", 3.0);
+    // At d0 = 12.5 mm (R0/d0 = 8) rather than the scene's 10 mm: 0.4 of the cost, so that the
+    // suite stays within CI's time. The scene as shipped is the README's figure.
+    collapse("column_collapse_tall.toml", 3.0, &["sph.spacing=0.0125"]);
 }

@@ -116,9 +116,9 @@ fn rough_plate_on_weightless_cohesive_soil_reaches_its_bearing_capacity() {
 fn cone_force_grows_with_depth_and_no_soil_gets_inside() {
     let text = format!(
         "[simulation]\nend_time = 0.5\nprecision = \"f32\"\nexchange_interval = 0.001\n\n[sph]\nspacing = 0.005\n\n{SAND}\n\
-         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.12, 0.12, 0.13]\n\n[terrain]\nmaterial = \"sand\"\ndepth = 0.07\n\n\
-         [[bodies]]\nname = \"cone\"\nshape = {{ type = \"cone\", radius = 0.02, height = 0.01155 }}\nmass = 0.5\nposition = [0.06, 0.06, 0.12]\n\n\
-         [rig]\ntype = \"cone\"\nbody = \"cone\"\nspeed = 0.1\ndepth = 0.03\n"
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.09, 0.09, 0.13]\n\n[terrain]\nmaterial = \"sand\"\ndepth = 0.07\n\n\
+         [[bodies]]\nname = \"cone\"\nshape = {{ type = \"cone\", radius = 0.02, height = 0.01155 }}\nmass = 0.5\nposition = [0.045, 0.045, 0.12]\n\n\
+         [rig]\ntype = \"cone\"\nbody = \"cone\"\nspeed = 0.15\ndepth = 0.03\n"
     );
     let scene = common::scene(&text);
     let out = common::out_dir("cone");
@@ -151,7 +151,7 @@ fn cone_force_grows_with_depth_and_no_soil_gets_inside() {
         let v: Vec<f64> = line.split(',').take(3).map(|x| x.parse().unwrap_or(f64::NAN)).collect();
         let z = v[2] - tip;
         if (0.0..=h).contains(&z) {
-            let r = ((v[0] - 0.06).powi(2) + (v[1] - 0.06).powi(2)).sqrt();
+            let r = ((v[0] - 0.045).powi(2) + (v[1] - 0.045).powi(2)).sqrt();
             if r < z * 0.02 / h {
                 inside += 1;
             }
@@ -163,8 +163,8 @@ fn cone_force_grows_with_depth_and_no_soil_gets_inside() {
 #[test]
 fn drawbar_pull_rises_with_slip_and_torque_is_positive() {
     let text = format!(
-        "[simulation]\nend_time = 0.6\nprecision = \"f32\"\nexchange_interval = 0.001\n\n[sph]\nspacing = 0.01\n\n{SAND}\n\
-         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.5, 0.14, 0.25]\n\n[terrain]\nmaterial = \"sand\"\ndepth = 0.08\n\n\
+        "[simulation]\nend_time = 0.4\nprecision = \"f32\"\nexchange_interval = 0.001\n\n[sph]\nspacing = 0.01\n\n{SAND}\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.4, 0.14, 0.25]\n\n[terrain]\nmaterial = \"sand\"\ndepth = 0.08\n\n\
          [[bodies]]\nname = \"wheel\"\nshape = {{ type = \"wheel\", radius = 0.1, width = 0.08, grousers = 12, grouser_height = 0.01, grouser_thickness = 0.005 }}\nmass = 2.0\nposition = [0.15, 0.07, 0.3]\n\n\
          [rig]\ntype = \"wheel\"\nbody = \"wheel\"\nload = 40.0\nangular_velocity = 1.0\nslips = [0.0, 0.4]\n"
     );

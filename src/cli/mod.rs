@@ -264,7 +264,7 @@ pub struct SweepArgs {
 pub enum Command {
     /// Run one scene at many points (`--vary KEY=VALUES`, a grid or a Latin hypercube) on Ray
     /// or threads, resumable, in shards for SLURM arrays: results.jsonl, results.csv and each
-    /// point's outputs under points/<id>/. `regolith sweep merge DIR` joins shards.
+    /// point's outputs under `points/<id>/`. `regolith sweep merge DIR` joins shards.
     #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
     Sweep {
         /// `merge`.
