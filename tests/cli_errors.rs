@@ -219,6 +219,7 @@ fn sweep_flag_errors_are_one_line() {
     assert_one_line_error(&with(&["--vary", "rig.slips"]), "--vary: `rig.slips` is not key=values");
     assert_one_line_error(&with(&["--vary", "a=1:2"]), "a grid needs listed values");
     assert_one_line_error(&with(&["--vary", "a=1,,2"]), "a: empty value");
+    assert_one_line_error(&with(&["--vary", "a=1,2,1"]), "--vary: a: value 1 is listed twice (each point must differ)");
     assert_one_line_error(&with(&["--vary", "a=1", "--vary", "a=2"]), "a is varied twice");
     assert_one_line_error(&with(&["--vary", "a=1", "--set", "a=2"]), "a is both --set and --vary");
     assert_one_line_error(&with(&["--vary", "a=1", "--design", "lhs"]), "--samples: is required with --design lhs");

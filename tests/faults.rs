@@ -240,3 +240,26 @@ fn every_hard_case_is_a_valid_case_and_scene() {
         }
     }
 }
+
+#[test]
+fn soil_thrown_out_of_the_domain_stops_the_run_loudly() {
+    // A block shot upwards at 5 m/s leaves the open-topped container: once no soil is left in
+    // the domain the run stops with a one-line error (its outputs kept) instead of stepping
+    // on to the end time over nothing.
+    let text = format!(
+        "{BOX}\n[[soil_blocks]]\nmaterial = \"sand\"\nshape = \"box\"\nmin = [0.08, 0.08, 0.12]\nmax = [0.12, 0.12, 0.16]\nvelocity = [0.0, 0.0, 5.0]\n"
+    )
+    .replace("end_time = 0.1", "end_time = 1.0");
+    let scene = common::scene(&text);
+    let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("faults_emptied");
+    let e = regolith::run::run_scene(&scene, &regolith::run::RunOptions::quiet(&out)).expect_err("must stop");
+    let msg = e.to_string();
+    assert_eq!(msg.lines().count(), 1, "{msg}");
+    let regolith::driver::RunError::Emptied { particles, time, .. } = e else { panic!("not Emptied: {msg}") };
+    assert_eq!(particles, 64, "4 × 4 × 4 lattice points at d0 = 1 cm");
+    // It leaves through the top of the domain long before the end time (1 s).
+    assert!(time > 0.0 && time < 0.2, "t = {time}");
+    let s = summary(&out);
+    assert_eq!(s["escaped_particles"], 64);
+    assert!(s["error"].as_str().is_some_and(|m| m.contains("left the domain")), "{}", s["error"]);
+}

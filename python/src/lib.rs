@@ -4,6 +4,7 @@
 //! Every Regolith error becomes a Python exception whose message is the one line the
 //! command-line tool prints (without its `error: ` prefix). Stepping releases the GIL.
 
+use pyo3::sync::MutexExt;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
@@ -267,8 +268,13 @@ fn particles_of<'py, T: Real + numpy::Element>(py: Python<'py>, s: &RSim<T>) -> 
 }
 
 impl Simulation {
-    fn lock(&self) -> PyResult<MutexGuard<'_, Any>> {
-        self.inner.lock().map_err(|_| SolverError::new_err("the simulation was poisoned by a panic in another thread"))
+    /// The simulation, waiting for it with the GIL released: a thread stepping holds the lock
+    /// with the GIL released and needs the GIL back to return, so a reader waiting on the lock
+    /// with the GIL held would deadlock both.
+    fn lock(&self, py: Python<'_>) -> PyResult<MutexGuard<'_, Any>> {
+        self.inner
+            .lock_py_attached(py)
+            .map_err(|_| SolverError::new_err("the simulation was poisoned by a panic in another thread"))
     }
     fn index(&self, name: &str) -> PyResult<usize> {
         self.names
@@ -302,14 +308,14 @@ impl Simulation {
 
     /// Simulated time (s).
     #[getter]
-    fn time(&self) -> PyResult<f64> {
-        Ok(with!(&*self.lock()?, s => s.time()))
+    fn time(&self, py: Python<'_>) -> PyResult<f64> {
+        Ok(with!(&*self.lock(py)?, s => s.time()))
     }
 
     /// `"f32"` or `"f64"`.
     #[getter]
-    fn precision(&self) -> PyResult<&'static str> {
-        Ok(match &*self.lock()? {
+    fn precision(&self, py: Python<'_>) -> PyResult<&'static str> {
+        Ok(match &*self.lock(py)? {
             Any::F32(_) => "f32",
             Any::F64(_) => "f64",
         })
@@ -317,8 +323,8 @@ impl Simulation {
 
     /// Soil particles in the domain.
     #[getter]
-    fn n_particles(&self) -> PyResult<usize> {
-        Ok(with!(&*self.lock()?, s => s.system.fluid.active()))
+    fn n_particles(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(with!(&*self.lock(py)?, s => s.system.fluid.active()))
     }
 
     /// Advances one exchange interval, or `max` seconds if that is sooner; returns what the
@@ -331,7 +337,7 @@ impl Simulation {
         {
             return Err(arg_err("max", format!("must be a finite number of seconds > 0 (got {m})")));
         }
-        let mut g = self.lock()?;
+        let mut g = self.lock(py)?;
         let any: &mut Any = &mut g;
         let r = py.detach(|| with!(any, s => s.step_max(max))).map_err(solver_err)?;
         report_dict(py, &r)
@@ -343,7 +349,7 @@ impl Simulation {
         if !(duration.is_finite() && duration >= 0.0) {
             return Err(arg_err("duration", format!("must be a finite number of seconds >= 0 (got {duration})")));
         }
-        let mut g = self.lock()?;
+        let mut g = self.lock(py)?;
         let any: &mut Any = &mut g;
         py.detach(|| {
             with!(any, s => {
@@ -364,7 +370,7 @@ impl Simulation {
     /// positive), `p_c` (Pa), `specific_volume`, `density` (kg/m³), `material` and `id`
     /// (uint32). One copy of the solver's arrays, handed to numpy without a second.
     fn particles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        match &*self.lock()? {
+        match &*self.lock(py)? {
             Any::F32(s) => particles_of(py, s),
             Any::F64(s) => particles_of(py, s),
         }
@@ -383,11 +389,11 @@ impl Simulation {
     }
 
     /// Sets the target speed (rad/s or m/s) of the motor of joint `joint` of vehicle `vehicle`.
-    fn set_motor_target(&self, vehicle: &str, joint: &str, target: f64) -> PyResult<()> {
+    fn set_motor_target(&self, py: Python<'_>, vehicle: &str, joint: &str, target: f64) -> PyResult<()> {
         if !target.is_finite() {
             return Err(arg_err("target", format!("must be finite (got {target})")));
         }
-        let mut g = self.lock()?;
+        let mut g = self.lock(py)?;
         with!(&mut *g, s => {
             let j = s.vehicle_joint(vehicle, joint).ok_or_else(|| {
                 arg_err("joint", format!("vehicle {vehicle:?} has no built joint {joint:?}"))
@@ -399,18 +405,18 @@ impl Simulation {
 
     /// Drives vehicle `vehicle` at constant wheel speeds (rad/s, forward positive): left-side
     /// wheels at `left`, right-side ones at `right`, torques up to `max_torque` (N m).
-    fn set_vehicle_drive(&self, vehicle: &str, left: f64, right: f64, max_torque: f64) -> PyResult<()> {
-        let mut g = self.lock()?;
+    fn set_vehicle_drive(&self, py: Python<'_>, vehicle: &str, left: f64, right: f64, max_torque: f64) -> PyResult<()> {
+        let mut g = self.lock(py)?;
         with!(&mut *g, s => s.set_vehicle_drive(vehicle, left, right, max_torque)).map_err(build_err)
     }
 
     /// Kinetic energy of the soil in the domain (J).
-    fn soil_kinetic_energy(&self) -> PyResult<f64> {
-        Ok(with!(&*self.lock()?, s => s.soil_kinetic_energy()))
+    fn soil_kinetic_energy(&self, py: Python<'_>) -> PyResult<f64> {
+        Ok(with!(&*self.lock(py)?, s => s.soil_kinetic_energy()))
     }
 
-    fn __repr__(&self) -> PyResult<String> {
-        let g = self.lock()?;
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let g = self.lock(py)?;
         Ok(with!(&*g, s => format!(
             "Simulation(t = {:.6} s, {} particles, bodies: {})",
             s.time(),
@@ -431,7 +437,7 @@ struct Body {
 impl Body {
     fn read<R>(&self, py: Python<'_>, f: impl FnOnce(&Any, regolith::sim::Body) -> R) -> PyResult<R> {
         let sim = self.sim.borrow(py);
-        let g = sim.lock()?;
+        let g = sim.lock(py)?;
         let b = with!(&*g, s => s.bodies().nth(self.index));
         let b = b.ok_or_else(|| arg_err("body", "no longer in the simulation"))?;
         Ok(f(&g, b))
@@ -485,7 +491,7 @@ impl Body {
             return Err(arg_err("set_velocity", "velocities must be finite"));
         }
         let sim = self.sim.borrow(py);
-        let mut g = sim.lock()?;
+        let mut g = sim.lock(py)?;
         let b = with!(&*g, s => s.bodies().nth(self.index)).ok_or_else(|| arg_err("body", "not found"))?;
         with!(&mut *g, s => s.set_body_velocity(b, linear, angular));
         Ok(())
@@ -497,7 +503,7 @@ impl Body {
             return Err(arg_err("target", format!("must be finite (got {target})")));
         }
         let sim = self.sim.borrow(py);
-        let mut g = sim.lock()?;
+        let mut g = sim.lock(py)?;
         with!(&mut *g, s => {
             let joint = s.scene.vehicles.iter().find_map(|v| {
                 v.model

@@ -118,6 +118,35 @@ def test_stepping_releases_the_gil(scenes):
     assert len(during) > 20, f"{len(during)} ticks in {t1 - t0:.2f} s"
 
 
+def test_reading_while_another_thread_steps_waits_without_deadlock(scenes):
+    """A thread reads sim.time and a body's force while another advances the same simulation:
+    the reader waits for the step with the GIL released (holding it would deadlock both: the
+    stepper needs the GIL back to return). faulthandler turns a hang into a failure."""
+    import faulthandler
+
+    sim = regolith.Simulation(regolith.load_scene(scenes / "cone_penetrometer.toml", overrides=SMALL))
+    cone = sim.body("cone")
+    seen = []
+
+    def stepper():
+        for _ in range(5):
+            sim.advance(0.002)
+
+    faulthandler.dump_traceback_later(120, exit=True)
+    try:
+        t = threading.Thread(target=stepper)
+        t.start()
+        while t.is_alive():
+            seen.append((sim.time, cone.fsi_force[2]))
+        t.join()
+    finally:
+        faulthandler.cancel_dump_traceback_later()
+    assert len(seen) > 0
+    times = [s[0] for s in seen]
+    assert times == sorted(times), "reads see whole steps, in order"
+    assert sim.time >= 0.01 - 1e-9
+
+
 def test_run_returns_the_summary(scenes, tmp_path):
     s = regolith.run(scenes / "cone_penetrometer.toml", tmp_path, overrides={"sph.spacing": 0.008, "simulation.end_time": 0.05})
     assert s["rig"]["type"] == "cone" and s["steps"] > 0 and not s["nan_detected"]

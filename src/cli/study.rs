@@ -18,12 +18,15 @@ pub(super) fn stability_cmd(cases_dir: PathBuf, cases: Vec<String>, size: String
     let wall: f64 = results.iter().map(|r| r.wall_s).sum();
     let known: Vec<&str> =
         results.iter().filter(|r| r.pass && r.known_failure.is_some()).map(|r| r.case.as_str()).collect();
+    let known_text = if known.is_empty() {
+        String::new()
+    } else {
+        format!(", {} fail as known ({})", known.len(), known.join(", "))
+    };
     println!(
-        "{} of {} cases pass, {} fail as known ({}), in {wall:.1} s; table in {}",
+        "{} of {} cases pass{known_text}, in {wall:.1} s; table in {}",
         results.len() - failed.len() - known.len(),
         results.len(),
-        known.len(),
-        known.join(", "),
         out.join("stability.md").display()
     );
     if failed.is_empty() {

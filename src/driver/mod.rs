@@ -51,6 +51,20 @@ pub enum RunError {
         #[source]
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// Every soil particle has left the domain: nothing is left to simulate, so the run stops
+    /// rather than stepping rigid bodies over no soil to the end time.
+    #[error(
+        "all {particles} soil particles left the domain by step {step} (t = {time:.6e} s); \
+         nothing is left to simulate (enlarge [container] or check the soil's initial velocity)"
+    )]
+    Emptied {
+        /// Soil particles generated.
+        particles: usize,
+        /// Simulated time (s).
+        time: f64,
+        /// Soil steps taken.
+        step: u64,
+    },
     /// A stop was requested (Ctrl-C); the outputs up to that point were written.
     #[error("interrupted (outputs up to t = {time:.4} s were written)")]
     Interrupted {
@@ -63,7 +77,14 @@ impl RunError {
     /// Whether the run ends with its outputs written up to this point (a solver failure, a
     /// runaway, a stop request) rather than at once (a build or output error).
     pub fn keeps_outputs(&self) -> bool {
-        matches!(self, Self::Solver(_) | Self::Failed { .. } | Self::Runaway { .. } | Self::Interrupted { .. })
+        matches!(
+            self,
+            Self::Solver(_)
+                | Self::Failed { .. }
+                | Self::Runaway { .. }
+                | Self::Emptied { .. }
+                | Self::Interrupted { .. }
+        )
     }
 
     /// The solver's error `cause` with a one-line report on the particle it names.
@@ -241,6 +262,10 @@ impl<'o, T: Real> Driver<'o, T> {
                     sim.time()
                 ),
             });
+        }
+        let fluid = &sim.system.fluid;
+        if fluid.active() == 0 && !fluid.is_empty() {
+            return Err(RunError::Emptied { particles: fluid.len(), time: sim.time(), step: fluid.steps() });
         }
         // Work follows the integrated (awake) particles, not the bed.
         let awake = sim.system.fluid.awake();

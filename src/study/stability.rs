@@ -201,7 +201,7 @@ fn run_case(
     let outcome = run_scene_observed(&scene, &RunOptions::quiet(out), &mut probe);
     let failure = match outcome {
         Ok(_) => None,
-        Err(e @ (RunError::Failed { .. } | RunError::Runaway { .. })) => Some(e.to_string()),
+        Err(e @ (RunError::Failed { .. } | RunError::Runaway { .. } | RunError::Emptied { .. })) => Some(e.to_string()),
         Err(e) => return Err(StudyError::Run { case: name.into(), source: e }),
     };
     result.wall_s = start.elapsed().as_secs_f64();

@@ -61,7 +61,14 @@ pub fn parse_vary(arg: &str) -> Result<Vary, InputError> {
     if items.iter().any(|s| s.trim().is_empty()) {
         return Err(bad(format!("{key}: empty value in `{rest}` (allowed: a,b,c or lo:hi)")));
     }
-    Ok(Vary { key: key.to_string(), values: Values::List(items.iter().map(|s| parse_value(s.trim())).collect()) })
+    let values: Vec<toml::Value> = items.iter().map(|s| parse_value(s.trim())).collect();
+    // A repeated value makes two points of one configuration: one id, one output folder.
+    for (i, v) in values.iter().enumerate() {
+        if values[..i].contains(v) {
+            return Err(bad(format!("{key}: value {v} is listed twice (each point must differ)")));
+        }
+    }
+    Ok(Vary { key: key.to_string(), values: Values::List(values) })
 }
 
 /// Splits on commas that are not inside `[]`, `{}` or quotes.
@@ -164,6 +171,8 @@ mod tests {
         assert!(parse_vary("a=2:1").is_err());
         assert!(parse_vary("a=1,,2").is_err());
         assert!(parse_vary("=1").is_err());
+        let e = parse_vary("a=0.2,0.4,0.2").expect_err("repeated value").to_string();
+        assert!(e.contains("value 0.2 is listed twice"), "{e}");
     }
 
     #[test]
