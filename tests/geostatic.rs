@@ -23,6 +23,8 @@ struct Outcome {
     expected_v: f64,
     k_ratio: f64,
     k0: f64,
+    /// −σxz / σzz at mid-depth (tan of the tilt of g about y in the infinite-slope state).
+    shear_ratio: f64,
     max_speed: f64,
     speed_scale: f64,
     escaped: usize,
@@ -44,26 +46,28 @@ fn settle<T: Real>(text: &str) -> Outcome {
     // Central columns (three spacings from the walls), the layer nearest mid-depth.
     // The lattice layer nearest mid-depth of the soil, which spans [d0/2, top].
     let mid_z = ((0.5 * d0 + 0.5 * depth_total) / d0).round() * d0;
-    let (mut sv, mut sh, mut count, mut z_sum) = (0.0, 0.0, 0.0, 0.0);
+    let (mut sv, mut sh, mut sxz, mut count, mut z_sum) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for (i, p) in pos.iter().enumerate() {
         let central = p[0] > 3.0 * d0 && p[0] < 0.3 - 3.0 * d0 && p[1] > 3.0 * d0 && p[1] < 0.3 - 3.0 * d0;
         if central && (p[2] - mid_z).abs() < 0.25 * d0 {
             let sig = s.stresses()[i].as_f64();
             sv += -sig[2];
             sh += -0.5 * (sig[0] + sig[1]);
+            sxz += sig[4];
             z_sum += p[2];
             count += 1.0;
         }
     }
     assert!(count > 10.0, "no particles at mid-depth");
     let rho = s.materials()[0].density.as_f64();
-    let g = 9.81;
+    let g = -scene.solver.gravity[2];
     let depth = top - z_sum / count;
     Outcome {
         sigma_v: sv / count,
         expected_v: rho * g * depth,
         k_ratio: sh / sv,
         k0: s.materials()[0].k0().as_f64(),
+        shear_ratio: sxz / sv,
         max_speed,
         speed_scale: (g * depth_total).sqrt(),
         escaped: s.len() - s.active(),
@@ -108,4 +112,33 @@ fn mcc_bed_stays_geostatic_f32_wendland() {
 #[test]
 fn dp_bed_stays_geostatic_f64_wendland() {
     check(settle::<f64>(&bed("dp", "f64", "wendland")), "dp f64 wendland");
+}
+
+#[test]
+fn a_bed_under_gravity_tilted_15_degrees_starts_in_the_infinite_slope_state_and_does_not_slide() {
+    // A slope modelled by tilting g (15° about y, below φ = 32°). The bed is generated in the
+    // infinite-slope state (σxz = ρ g sin15° depth; exact, see the terrain crate's unit test)
+    // and must not slide: speeds stay below 1 % of sqrt(g depth) and nothing leaves the box.
+    // Known miss, measured here and reported, not asserted: the walls' stress extrapolation
+    // (Adami: isotropic, `σ_w = σ̄ − ρ (g − a)·r I`) cannot carry the shear gradient the floor
+    // needs, so within one wave transit the soil leans on the downhill wall instead: at
+    // t = 0.05 s −σxz/σzz at mid-depth is 0.02 (tan 15° = 0.27) and σzz is 21 % above
+    // ρ g cos15° depth. See NOTES.md (tilted gravity).
+    let a = 15f64.to_radians();
+    let text = bed("dp", "f64", "wendland").replace(
+        "end_time = 0.15\n",
+        &format!("end_time = 0.05\ngravity = [{}, 0.0, {}]\n", -9.81 * a.sin(), -9.81 * a.cos()),
+    );
+    let o = settle::<f64>(&text);
+    eprintln!(
+        "tilted 15°: −σxz/σzz = {:.4} (tan 15° = {:.4}); σzz {:.1} Pa vs ρ g cos15° depth {:.1} Pa ({:+.1} %); max speed / sqrt(g d) = {:.2e}",
+        o.shear_ratio,
+        a.tan(),
+        o.sigma_v,
+        o.expected_v,
+        100.0 * (o.sigma_v / o.expected_v - 1.0),
+        o.max_speed / o.speed_scale
+    );
+    assert!(o.max_speed < 0.01 * o.speed_scale, "slides: max speed {:.3e} m/s", o.max_speed);
+    assert_eq!(o.escaped, 0, "particles escaped");
 }

@@ -88,6 +88,12 @@ case!(
     "{}:2: key `simulation.end_time`: must be > 0 s (got -1)"
 );
 case!(
+    gravity_up,
+    "dt = \"auto\"",
+    "dt = \"auto\"\ngravity = [0.0, 0.0, 9.81]",
+    "{}:4: key `simulation.gravity`: must not point up (z ≤ 0; soil is layered along −z, tilt g for a slope) (got [0.0, 0.0, 9.81])"
+);
+case!(
     dt_word,
     "dt = \"auto\"",
     "dt = \"fast\"",

@@ -72,6 +72,12 @@ pub(super) fn resolve_settings(
     if gravity.iter().any(|g| !g.is_finite()) {
         return Err(e("simulation.gravity", format!("must be three finite numbers in m/s² (got {gravity:?})")));
     }
+    if gravity[2] > 0.0 {
+        return Err(e(
+            "simulation.gravity",
+            format!("must not point up (z ≤ 0; soil is layered along −z, tilt g for a slope) (got {gravity:?})"),
+        ));
+    }
     let backend = match sim.backend.unwrap_or(BackendName::Cpu) {
         BackendName::Auto => Backend::Auto,
         BackendName::Cpu => Backend::Cpu,

@@ -6,10 +6,14 @@
 //! one spacing in. Each lattice point stands for a d0³ cell, so the soil's effective boundary
 //! is d0/2 from the wall plane (Chrono's convention for markers on the surface).
 //!
-//! Initial stress is geostatic along gravity's z component: in each lattice column the
-//! vertical stress at a particle is the weight of the soil above it (its own half cell
-//! included), `σv = −Σ ρ |g_z| d0`, and `σh = K0 σv` with the particle's material K0. MCC
-//! points get `p_c0 = OCR · p0` and their specific volume from the compression lines.
+//! Initial stress is geostatic, along the gravity vector it is given: in each lattice column
+//! the vertical stress at a particle is the weight of the soil above it (its own half cell
+//! included), `σzz = −Σ ρ |g_z| d0`, and `σxx = σyy = K0 σzz` with the particle's material K0.
+//! A tilted gravity (a slope modelled by tilting g over a level bed) adds the shear that holds
+//! the layer against gravity's tangential part, `σxz = −Σ ρ g_x d0` and `σyz = −Σ ρ g_y d0`
+//! (the infinite-slope state: `∂σ_iz/∂z + ρ g_i = 0`), so a bed steeper than nothing still
+//! starts in equilibrium. MCC points get `p_c0 = OCR · p0` and their specific volume from the
+//! compression lines.
 
 use std::collections::{BTreeMap, HashMap};
 
@@ -172,17 +176,20 @@ pub fn build_terrain(
     for (c, r) in &cells {
         columns.entry((c[0], c[1])).or_default().push((c[2], *r));
     }
-    let g = gravity[2].abs();
     let mut particles = Vec::with_capacity(cells.len());
     for ((i, j), mut col) in columns {
         col.sort_unstable_by_key(|c| std::cmp::Reverse(c.0));
-        let mut above = 0.0; // weight per area of the soil above the current particle (Pa)
+        // Mass per area of the soil above the current particle (kg/m²): the stress it carries
+        // is that times −g (component by component).
+        let mut above = 0.0;
         for (k, r) in col {
             let m = regions[r].material;
             let mat = &materials[m as usize];
-            let half = mat.density * g * 0.5 * d0;
-            let sv = -(above + half);
+            let half = mat.density * 0.5 * d0;
+            let column = above + half;
             above += 2.0 * half;
+            let sv = column * gravity[2];
+            let (sxz, syz) = (-column * gravity[0], -column * gravity[1]);
             let sh = mat.k0() * sv;
             let p0 = -(sv + 2.0 * sh) / 3.0;
             let st = mat.initial_state(p0);
@@ -191,7 +198,7 @@ pub fn build_terrain(
                 vel: regions[r].velocity,
                 rho: mat.density,
                 mass: mat.density * d0 * d0 * d0,
-                sigma: [sh, sh, sv, 0.0, 0.0, 0.0],
+                sigma: [sh, sh, sv, 0.0, sxz, syz],
                 pc: if matches!(mat.rheology, Rheology::Mcc(_)) { st.pc } else { 0.0 },
                 specific_volume: st.v,
                 material: m,
@@ -255,6 +262,30 @@ mod tests {
         // Wall shell: floor and four walls, 3 layers, up to the container top.
         assert!(b.markers.iter().all(|m| m.pos[2] <= 0.2 + 1e-12 && m.pos[2] >= -0.02 - 1e-12));
         assert!(b.notes.is_empty());
+    }
+
+    #[test]
+    fn a_tilted_gravity_gives_the_infinite_slope_state() {
+        // g tilted by 10° about y (a 10° slope rising towards +x) and 4° about x.
+        let c = Aabb { min: [0.0; 3], max: [0.2, 0.1, 0.2] };
+        let regions = [RegionSpec {
+            region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) },
+            material: 0,
+            velocity: [0.0; 3],
+        }];
+        let (a, b) = (10f64.to_radians(), 4f64.to_radians());
+        let g = [-9.81 * a.sin(), 9.81 * b.sin(), -9.81 * a.cos() * b.cos()];
+        let built = build_terrain(&c, 0.01, 3, g, &regions, &[dp()]).expect("builds");
+        for p in &built.particles {
+            // Mass per area above the particle's centre (its own half cell included).
+            let w = 1600.0 * (0.1 - p.pos[2] + 0.005);
+            let want = [0.5 * w * g[2], 0.5 * w * g[2], w * g[2], 0.0, -w * g[0], -w * g[1]];
+            for (k, (got, want)) in p.sigma.iter().zip(want).enumerate() {
+                assert!((got - want).abs() < 1e-9 * w * 9.81, "σ[{k}] at z = {}: {got} vs {want}", p.pos[2]);
+            }
+            // Tangential over normal traction on a horizontal plane is tan of the tilt.
+            assert!((p.sigma[4] / p.sigma[2] + a.tan() / b.cos()).abs() < 1e-12);
+        }
     }
 
     #[test]
