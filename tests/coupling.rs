@@ -212,3 +212,43 @@ fn a_body_without_markers_falls_exactly_as_in_rapier() {
     }
     assert!(sim.body_state(b).linvel[2] < -0.9);
 }
+
+#[test]
+fn a_wheel_driven_up_a_slope_balances_the_downhill_load_and_slips_more() {
+    // The single-wheel scene in slope mode, sized down (d0 2 cm, 0.6 s a slope): gravity is
+    // tilted per slope, the carriage is free along the bed, the load (40 N) is carried along
+    // gravity. Once the wheel climbs steadily the soil's force along the slope (the drawbar
+    // pull) balances the load's downhill part, 40 sin θ N: a force balance, to 10 % of it
+    // plus 1 N for what the carriage still accelerates over the averaged second half.
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes/single_wheel.toml"),
+    )
+    .expect("read")
+    .replace("slips = [0.0, 0.2, 0.4, 0.6]", "slopes = [0.0, 25.0]")
+    .replace("end_time = 2.0 ", "end_time = 0.6 ")
+    .replace("spacing = 0.01", "spacing = 0.02");
+    let scene = common::scene(&text);
+    let out = common::out_dir("wheel_slopes");
+    let summary = run_scene(&scene, &RunOptions::quiet(&out)).expect("runs");
+    let v = serde_json::to_value(&summary).expect("json");
+    let rig = &v["rig"];
+    assert_eq!(rig["drive"]["slopes_deg"], serde_json::json!([0.0, 25.0]));
+    let runs = rig["steady_state"].as_array().expect("runs");
+    assert_eq!(runs.len(), 2);
+    let num = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} in {r}"));
+    for r in runs {
+        let (dbp, want) = (num(r, "drawbar_pull"), num(r, "downhill_load_n"));
+        eprintln!(
+            "slope {}°: slip {:.3} ± {:.3}, DBP {dbp:.2} N vs load sin θ {want:.2} N, sinkage {:.4} m",
+            num(r, "slope_deg"),
+            num(r, "measured_slip"),
+            num(r, "slip_std"),
+            num(r, "sinkage")
+        );
+        assert!((dbp - want).abs() < 0.1 * want + 1.0, "DBP {dbp} N vs {want} N");
+    }
+    assert!((num(&runs[0], "downhill_load_n")).abs() < 1e-12);
+    assert!((num(&runs[1], "downhill_load_n") - 40.0 * 25f64.to_radians().sin()).abs() < 1e-9);
+    let (s0, s25) = (num(&runs[0], "measured_slip"), num(&runs[1], "measured_slip"));
+    assert!(s25 > s0 + 0.05, "slip on 25° {s25} vs level {s0}");
+}

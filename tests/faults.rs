@@ -252,10 +252,10 @@ fn soil_thrown_out_of_the_domain_stops_the_run_loudly() {
     .replace("end_time = 0.1", "end_time = 1.0");
     let scene = common::scene(&text);
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("faults_emptied");
-    let e = regolith::run::run_scene(&scene, &regolith::run::RunOptions::quiet(&out)).expect_err("must stop");
+    let e = run_scene(&scene, &RunOptions::quiet(&out)).expect_err("must stop");
     let msg = e.to_string();
     assert_eq!(msg.lines().count(), 1, "{msg}");
-    let regolith::driver::RunError::Emptied { particles, time, .. } = e else { panic!("not Emptied: {msg}") };
+    let RunError::Emptied { particles, time, .. } = e else { panic!("not Emptied: {msg}") };
     assert_eq!(particles, 64, "4 × 4 × 4 lattice points at d0 = 1 cm");
     // It leaves through the top of the domain long before the end time (1 s).
     assert!(time > 0.0 && time < 0.2, "t = {time}");

@@ -372,7 +372,7 @@ fn body_and_rig_scene_is_valid() {
 
 #[test]
 fn body_and_rig_errors() {
-    let cases: [(&str, &str, &str, &str); 10] = [
+    let cases: [(&str, &str, &str, &str); 12] = [
         (
             "mass = 2.0",
             "mass = 2.0\nactive_margin = -0.05",
@@ -417,6 +417,18 @@ fn body_and_rig_errors() {
         ),
         (
             "slips = [0.0, 0.3]",
+            "slips = [0.0, 0.3]\nslopes = [10.0]",
+            "{}:35: key `rig.slips`: and slopes are both given: prescribe slips, tow the carriage, or drive up slopes",
+            "slips_and_slopes",
+        ),
+        (
+            "slips = [0.0, 0.3]",
+            "slopes = [0.0, 75.0]",
+            "{}:35: key `rig.slopes`: must be in [0, 60) degrees (got 75)",
+            "slope_range",
+        ),
+        (
+            "slips = [0.0, 0.3]",
             "slips = [0.0, 0.3]\nspeed = 0.1",
             "{}:36: key `rig.speed`: does not apply to a wheel rig",
             "rig_foreign_key",
@@ -438,6 +450,15 @@ fn body_and_rig_errors() {
         let (p, e) = body_err(name, from, to);
         assert_eq!(e, expected.replace("{}", &p.display().to_string()), "case {name}");
     }
+    // Slope mode tilts gravity itself, so the scene's must point along −z.
+    let text = format!("{BASE}{BODY}").replacen("slips = [0.0, 0.3]", "slopes = [5.0]", 1).replacen(
+        "dt = \"auto\"",
+        "dt = \"auto\"\ngravity = [-1.0, 0.0, -9.0]",
+        1,
+    );
+    let (p, e) = err("slopes_with_tilted_gravity", &text);
+    let want = "{}:36: key `rig.slopes`: tilt simulation.gravity themselves: give gravity along −z (got [-1.0, 0.0, -9.0]) and the rig tilts it per slope";
+    assert_eq!(e, want.replace("{}", &p.display().to_string()));
 }
 
 #[test]

@@ -1,5 +1,6 @@
 //! Single-wheel rig: a wheel on a motorised axle, its carriage driven at `v = ωR(1 − s)` for
-//! each slip of a list (or towed by a force); drawbar pull, torque and sinkage.
+//! each slip of a list, towed by a force, or left free on each slope of a list (gravity
+//! tilted about y, the load carried along it); drawbar pull, torque, sinkage and slip.
 
 use regolith_fsi::Real;
 use regolith_rigid::{BodyDesc, JointDesc, JointKind, MassSpec, Motion, Pose, ShapeDesc, VelocityMotor};
@@ -25,6 +26,19 @@ struct WheelRun {
     torque: f64,
     /// Mean sinkage of the wheel centre from its start (m).
     sinkage: f64,
+    /// Slope (degrees; slope mode).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    slope_deg: Option<f64>,
+    /// Standard deviation of the measured slip over the second half (free-carriage modes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    slip_std: Option<f64>,
+    /// Weight of the load resolved along the slope, `load sin θ` (N; slope mode): in steady
+    /// state the drawbar pull balances it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    downhill_load_n: Option<f64>,
+    /// The run's label in the series (its slip, slope or NaN).
+    #[serde(skip)]
+    label: f64,
 }
 
 pub(super) fn wheel<T: Real>(
@@ -36,22 +50,31 @@ pub(super) fn wheel<T: Real>(
     driver: &mut Driver<'_, T>,
 ) -> Result<RigOutput<T>, RunError> {
     let g = -scene.solver.gravity[2];
+    let g_norm = scene.solver.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
     let radius = match scene.bodies[body].desc.shape {
         ShapeDesc::Wheel { radius, .. } | ShapeDesc::Cylinder { radius, .. } => radius,
         _ => return Err(BuildError::RigShape { rig: "wheel", allowed: "a wheel" }.into()),
     };
-    let slips: Vec<Option<f64>> = match drive {
-        WheelDrive::Slips(s) => s.iter().map(|x| Some(*x)).collect(),
-        WheelDrive::Tow(_) => vec![None],
+    // (prescribed slip, slope in degrees) of each run.
+    let cases: Vec<(Option<f64>, Option<f64>)> = match drive {
+        WheelDrive::Slips(s) => s.iter().map(|x| (Some(*x), None)).collect(),
+        WheelDrive::Tow(_) => vec![(None, None)],
+        WheelDrive::Slopes(s) => s.iter().map(|x| (None, Some(*x))).collect(),
     };
-    let multi = slips.len() > 1;
+    let multi = cases.len() > 1;
     let mut series: Option<Series> = None;
     let mut runs = Vec::new();
     let mut last: Option<Simulation<T>> = None;
     let mut stopped = None;
-    for slip in slips {
+    for (slip, slope) in cases {
         let mut sc = scene.clone();
         sc.bodies[body].desc.motion = Motion::Free;
+        if let Some(deg) = slope {
+            // The slope rises along +x: gravity tilted about y, downhill along −x.
+            let a = deg.to_radians();
+            sc.solver.gravity = [-g_norm * a.sin(), 0.0, -g_norm * a.cos()];
+        }
+        let gravity = sc.solver.gravity;
         place_on_soil(&mut sc, body)?;
         let centre = sc.bodies[body].desc.pose.translation;
         let wheel_mass = sc.bodies[body].desc.mass.mass_of(&sc.bodies[body].desc.shape);
@@ -74,7 +97,7 @@ pub(super) fn wheel<T: Real>(
             WheelDrive::Slips(_) => rigid
                 .add_body(&small("rig sled", Motion::Prescribed { linvel: [v, 0.0, 0.0], angvel: [0.0; 3] }))
                 .map_err(rig_err)?,
-            WheelDrive::Tow(f) => {
+            WheelDrive::Tow(_) | WheelDrive::Slopes(_) => {
                 let rail = rigid.add_body(&small("rig rail", Motion::Fixed)).map_err(rig_err)?;
                 let sled = rigid.add_body(&small("rig sled", Motion::Free)).map_err(rig_err)?;
                 rigid
@@ -88,14 +111,25 @@ pub(super) fn wheel<T: Real>(
                         motor: None,
                     })
                     .map_err(rig_err)?;
-                rigid.set_extra_force(sled, [-f, 0.0, 0.0]);
+                if let WheelDrive::Tow(f) = drive {
+                    rigid.set_extra_force(sled, [-f, 0.0, 0.0]);
+                }
                 sled
             }
         };
         let carriage = rigid.add_body(&small("rig carriage", Motion::Free)).map_err(rig_err)?;
-        // The carriage carries the rest of the load: total vertical load on the soil = `load`.
-        let extra = load - (wheel_mass + rigid.mass(carriage)) * g;
-        rigid.set_extra_force(carriage, [0.0, 0.0, -extra]);
+        if slope.is_some() {
+            // The load is a mass `load / |g|` under the tilted gravity: the carriage carries
+            // what the wheel and carriage do not weigh (normal to the bed), and along the
+            // slope what the wheel, carriage and sled do not (the sled rides the rail).
+            let m = load / g_norm;
+            let (mw, mc, ms) = (wheel_mass, rigid.mass(carriage), rigid.mass(sled));
+            rigid.set_extra_force(carriage, [(m - mw - mc - ms) * gravity[0], 0.0, (m - mw - mc) * gravity[2]]);
+        } else {
+            // The carriage carries the rest of the load: total vertical load on the soil = `load`.
+            let extra = load - (wheel_mass + rigid.mass(carriage)) * g;
+            rigid.set_extra_force(carriage, [0.0, 0.0, -extra]);
+        }
         rigid
             .add_joint(&JointDesc {
                 name: "rig vertical".into(),
@@ -118,7 +152,7 @@ pub(super) fn wheel<T: Real>(
                 motor: Some(VelocityMotor { target: omega, max_effort: 1.0e5 }),
             })
             .map_err(rig_err)?;
-        let label = slip.unwrap_or(f64::NAN);
+        let label = slip.or(slope).unwrap_or(f64::NAN);
         let s = series.get_or_insert_with(|| Series::new(&sim, multi, &["slip", "drawbar_pull", "torque", "sinkage"]));
         let mut rows: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
         let names = ["slip", "drawbar_pull", "torque", "sinkage"];
@@ -145,12 +179,17 @@ pub(super) fn wheel<T: Real>(
         let n = half.len().max(1) as f64;
         let mean = |f: fn(&(f64, f64, f64, f64, f64)) -> f64| half.iter().map(|r| f(r)).sum::<f64>() / n;
         let measured = mean(|r| r.1);
+        let spread = (half.iter().map(|r| (r.1 - measured).powi(2)).sum::<f64>() / n).sqrt();
         runs.push(WheelRun {
             slip: slip.unwrap_or(measured),
             measured_slip: measured,
             drawbar_pull: mean(|r| r.2),
             torque: mean(|r| r.3),
             sinkage: mean(|r| r.4),
+            slope_deg: slope,
+            slip_std: slip.is_none().then_some(spread),
+            downhill_load_n: slope.map(|d| load * d.to_radians().sin()),
+            label,
         });
         last = Some(sim);
         if stopped.is_some() {
@@ -184,8 +223,11 @@ pub(super) fn wheel<T: Real>(
         ];
         for r in &runs {
             let rows: Vec<&Vec<f64>> =
-                s.rows.iter().filter(|row| run_col.is_none_or(|c| (row[c] - r.slip).abs() < 1e-12)).collect();
-            let name = format!("s = {:.2}", r.slip);
+                s.rows.iter().filter(|row| run_col.is_none_or(|c| (row[c] - r.label).abs() < 1e-12)).collect();
+            let name = match r.slope_deg {
+                Some(d) => format!("{d}°"),
+                None => format!("s = {:.2}", r.slip),
+            };
             panels[0].series.push(crate::output::plot::Series::line(
                 name.clone(),
                 rows.iter().map(|row| (row[t], row[d])).collect(),
@@ -200,7 +242,19 @@ pub(super) fn wheel<T: Real>(
         }
         figures.push(("wheel_time".into(), crate::output::plot::Figure { panels }));
     }
-    if runs.len() > 1 {
+    if runs.len() > 1 && matches!(drive, WheelDrive::Slopes(_)) {
+        let slip = crate::output::plot::Panel {
+            title: "slip – slope".into(),
+            x_label: "slope (°)".into(),
+            y_label: "steady slip".into(),
+            series: vec![crate::output::plot::Series::line(
+                "slip (mean of the second half)",
+                runs.iter().map(|r| (r.slope_deg.unwrap_or(f64::NAN), r.measured_slip)).collect(),
+            )],
+            ..Default::default()
+        };
+        figures.push(("wheel_slope".into(), crate::output::plot::Figure { panels: vec![slip] }));
+    } else if runs.len() > 1 {
         let dbp = crate::output::plot::Panel {
             title: "drawbar pull – slip".into(),
             x_label: "slip".into(),
@@ -228,7 +282,11 @@ pub(super) fn wheel<T: Real>(
         "load_n": load,
         "angular_velocity": omega,
         "radius_m": radius,
-        "drive": match drive { WheelDrive::Slips(_) => serde_json::json!("slip"), WheelDrive::Tow(f) => serde_json::json!({"tow_force": f}) },
+        "drive": match drive {
+            WheelDrive::Slips(_) => serde_json::json!("slip"),
+            WheelDrive::Tow(f) => serde_json::json!({"tow_force": f}),
+            WheelDrive::Slopes(s) => serde_json::json!({"slopes_deg": s}),
+        },
         "steady_state": runs,
     });
     Ok(RigOutput { series: series.unwrap_or_default(), report, bekker: None, figures, last, stopped })

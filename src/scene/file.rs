@@ -262,4 +262,5 @@ pub(crate) struct RigFile {
     pub angular_velocity: Option<f64>,
     pub slips: Option<Vec<f64>>,
     pub tow_force: Option<f64>,
+    pub slopes: Option<Vec<f64>>,
 }

@@ -144,7 +144,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     check_lattice_size(&container, &bodies, spacing, &e)?;
     let rig = match &file.rig {
         None => None,
-        Some(r) => Some(resolve_rig(path, source, r, &bodies, &file.bodies)?),
+        Some(r) => Some(resolve_rig(path, source, r, &bodies, &file.bodies, solver.gravity)?),
     };
     let output = resolve_output(file.output.unwrap_or_default(), end_time, exchange_interval, &e)?;
     Ok(Scene {

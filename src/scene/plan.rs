@@ -235,6 +235,9 @@ pub fn describe(scene: &Scene) -> String {
                 match drive {
                     super::WheelDrive::Slips(s) => format!("slips {s:?} ({} runs of {} s)", s.len(), scene.end_time),
                     super::WheelDrive::Tow(f) => format!("towed with {f} N"),
+                    super::WheelDrive::Slopes(s) => {
+                        format!("up slopes {s:?}° ({} runs of {} s, gravity tilted about y)", s.len(), scene.end_time)
+                    }
                 }
             ),
         };

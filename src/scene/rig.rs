@@ -8,6 +8,7 @@ pub(super) fn resolve_rig(
     r: &RigFile,
     bodies: &[BodySpec],
     files: &[BodyFile],
+    gravity: [f64; 3],
 ) -> Result<RigSpec, InputError> {
     let e = |k: &str, msg: String| key_err(path, source, format!("rig.{k}"), msg);
     let kind = r.kind.ok_or_else(|| e("type", "is required: \"plate\", \"cone\" or \"wheel\"".into()))?;
@@ -48,6 +49,7 @@ pub(super) fn resolve_rig(
             forbid("angular_velocity", r.angular_velocity.is_some())?;
             forbid("slips", r.slips.is_some())?;
             forbid("tow_force", r.tow_force.is_some())?;
+            forbid("slopes", r.slopes.is_some())?;
             match shape {
                 ShapeDesc::Cylinder { axis: Axis::Z, .. } | ShapeDesc::Box { .. } => {}
                 _ => {
@@ -81,6 +83,7 @@ pub(super) fn resolve_rig(
                 ("angular_velocity", r.angular_velocity.is_some()),
                 ("slips", r.slips.is_some()),
                 ("tow_force", r.tow_force.is_some()),
+                ("slopes", r.slopes.is_some()),
             ] {
                 forbid(k, p)?;
             }
@@ -102,17 +105,20 @@ pub(super) fn resolve_rig(
                     ));
                 }
             }
-            let drive = match (&r.slips, r.tow_force) {
-                (Some(_), Some(_)) => {
-                    return Err(e("slips", "and tow_force are both given: prescribe slips or tow the carriage".into()));
-                }
-                (None, None) => {
-                    return Err(e(
-                        "slips",
-                        "is required (a list of slip ratios in [0, 1]), or give tow_force (N)".into(),
-                    ));
-                }
-                (Some(s), None) => {
+            let given =
+                [("slips", r.slips.is_some()), ("tow_force", r.tow_force.is_some()), ("slopes", r.slopes.is_some())];
+            let named: Vec<&str> = given.iter().filter(|g| g.1).map(|g| g.0).collect();
+            if named.len() > 1 {
+                return Err(e(
+                    named[0],
+                    format!(
+                        "and {} are both given: prescribe slips, tow the carriage, or drive up slopes",
+                        named[1..].join(" and ")
+                    ),
+                ));
+            }
+            let drive = match (&r.slips, r.tow_force, &r.slopes) {
+                (Some(s), _, _) => {
                     if s.is_empty() {
                         return Err(e("slips", "must list at least one slip ratio".into()));
                     }
@@ -121,11 +127,35 @@ pub(super) fn resolve_rig(
                     }
                     WheelDrive::Slips(s.clone())
                 }
-                (None, Some(t)) => {
+                (None, Some(t), _) => {
                     if !(t.is_finite() && t >= 0.0) {
                         return Err(e("tow_force", format!("must be ≥ 0 N (got {t})")));
                     }
                     WheelDrive::Tow(t)
+                }
+                (None, None, Some(s)) => {
+                    if s.is_empty() {
+                        return Err(e("slopes", "must list at least one slope angle (degrees)".into()));
+                    }
+                    if let Some(x) = s.iter().find(|x| !(x.is_finite() && (0.0..60.0).contains(*x))) {
+                        return Err(e("slopes", format!("must be in [0, 60) degrees (got {x})")));
+                    }
+                    if gravity[0] != 0.0 || gravity[1] != 0.0 || gravity[2] >= 0.0 {
+                        return Err(e(
+                            "slopes",
+                            format!(
+                                "tilt simulation.gravity themselves: give gravity along −z (got {gravity:?}) and the rig tilts it per slope"
+                            ),
+                        ));
+                    }
+                    WheelDrive::Slopes(s.clone())
+                }
+                (None, None, None) => {
+                    return Err(e(
+                        "slips",
+                        "is required (a list of slip ratios in [0, 1]), or give tow_force (N) or slopes (degrees)"
+                            .into(),
+                    ));
                 }
             };
             RigSpec::Wheel {

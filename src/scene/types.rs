@@ -101,6 +101,10 @@ pub enum WheelDrive {
     Slips(Vec<f64>),
     /// Free carriage pulled back by a constant towing force (N); slip is an output.
     Tow(f64),
+    /// Free carriage driven up each slope (degrees, one run per slope): gravity is tilted
+    /// about y so that the slope rises along +x, the load is carried along gravity, and the
+    /// steady slip is an output.
+    Slopes(Vec<f64>),
 }
 
 /// A test rig.
