@@ -231,6 +231,8 @@ fn sweep_flag_errors_are_one_line() {
     let empty = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("empty-sweep");
     std::fs::create_dir_all(&empty).expect("tmp");
     assert_one_line_error(&["sweep", "merge", &empty.display().to_string()], "holds no results.jsonl");
+    let e = empty.display().to_string();
+    assert_one_line_error(&["sweep", "converge", &e, "--metric", "runout.runout_m"], "holds no results.jsonl");
     // The Ray runner without a Python to run it: one line saying what to do.
     let out = Command::new(env!("CARGO_BIN_EXE_regolith"))
         .args(["sweep", scene, "--vary", "rig.slips=0.2"])

@@ -63,16 +63,18 @@ fn base_scene_is_valid() {
 
 #[test]
 fn every_example_scene_is_valid() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/scenes");
-    let mut n = 0;
-    for entry in std::fs::read_dir(&dir).expect("examples/scenes") {
-        let p = entry.expect("entry").path();
-        if p.extension().and_then(|e| e.to_str()) == Some("toml") {
-            load_scene(&p, &[]).unwrap_or_else(|e| panic!("{e}"));
-            n += 1;
+    for sub in ["examples/scenes", "examples/study"] {
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(sub);
+        let mut n = 0;
+        for entry in std::fs::read_dir(&dir).expect(sub) {
+            let p = entry.expect("entry").path();
+            if p.extension().and_then(|e| e.to_str()) == Some("toml") {
+                load_scene(&p, &[]).unwrap_or_else(|e| panic!("{e}"));
+                n += 1;
+            }
         }
+        assert!(n >= 1, "{sub} holds no scene");
     }
-    assert!(n >= 1);
 }
 
 case!(

@@ -26,7 +26,9 @@ import argparse
 import json
 import math
 import os
+import signal
 import sys
+import threading
 import time
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -98,6 +100,17 @@ def merge(out: Union[str, "os.PathLike[str]"]) -> int:
     """Joins a sweep directory's shard files into ``results.jsonl`` and ``results.csv``;
     returns the number of points."""
     return _regolith.sweep_merge(os.fspath(out))
+
+
+def converge(
+    out: Union[str, "os.PathLike[str]"], metric: str, over: str = "sph.spacing"
+) -> List[Dict[str, Any]]:
+    """Observed order and extrapolated limit of ``metric`` (a ``results.csv`` column name)
+    over the resolution key ``over``: one dict per ladder (the points that differ only in
+    ``over``) with ``fixed``, ``levels`` [(h, value)], ``missing``, ``convergence`` (``order``,
+    ``order_range``, ``limit``, ``coefficient``, ``gci``, ``rms_residual``) or ``error``. As
+    ``regolith sweep converge``; raises ``InputError`` for a key or metric the sweep lacks."""
+    return json.loads(_regolith.sweep_converge_json(os.fspath(out), over, metric))
 
 
 def _eta(s: float) -> str:
@@ -231,23 +244,40 @@ def _run_ray(common, pending, out, shard, address, num_cpus, num_gpus, progress)
         import ray
     except ImportError as e:
         raise InputError(f"runner='ray' needs Ray ({e}); install it (pip install ray) or use runner='threads'") from None
+    # A process started with SIGINT ignored (nohup, a background job of a script) keeps
+    # ignoring it; otherwise Ctrl-C must stop the sweep (see below).
+    sigint_ignored = signal.getsignal(signal.SIGINT) == signal.SIG_IGN
     started = not ray.is_initialized()
     if started:
         if address is None:
             ray.init(include_dashboard=False, log_to_driver=False)
         else:
             ray.init(address=address, log_to_driver=False)
+    # Ctrl-C / SIGINT must stop the sweep at once: Ray may replace the SIGINT handler when it
+    # starts, and a ray.wait without a timeout blocks in C++ where no Python handler runs.
+    # So the default handler (KeyboardInterrupt) goes back in, the wait polls, and the points
+    # still running are cancelled on the way out (their records are simply not written).
+    previous = None
+    if not sigint_ignored and threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    refs: List[Any] = []
     try:
         task = ray.remote(num_cpus=num_cpus, num_gpus=num_gpus, max_retries=0)(_point_task)
         threads = max(1, int(num_cpus))
         refs = [task.remote((*common, p, out), threads) for p in pending]
         while refs:
-            finished, refs = ray.wait(refs, num_returns=1)
+            finished, refs = ray.wait(refs, num_returns=1, timeout=0.2)
             for r in finished:
                 line = ray.get(r)
                 _regolith.sweep_append(out, line, shard)
                 progress.done(json.loads(line), len(refs))
+    except KeyboardInterrupt:
+        for r in refs:
+            ray.cancel(r, force=True)
+        raise
     finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
         if started:
             ray.shutdown()
 

@@ -733,6 +733,14 @@ fn sweep_merge(out: PathBuf) -> PyResult<usize> {
     sweep::merge(&out).map_err(input_err)
 }
 
+/// The ladders of a sweep over the resolution key `over` for the summary value `metric`
+/// (see `regolith sweep converge`), as JSON.
+#[pyfunction]
+fn sweep_converge_json(out: PathBuf, over: &str, metric: &str) -> PyResult<String> {
+    let ls = sweep::converge(&out, over, metric).map_err(input_err)?;
+    serde_json::to_string(&ls).map_err(|e| RunError::new_err(e.to_string()))
+}
+
 /// The shard of a SLURM array task (`"i/n"`), from its environment, or None outside one.
 #[pyfunction]
 fn slurm_shard() -> PyResult<Option<String>> {
@@ -770,6 +778,7 @@ fn _regolith(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sweep_records_json, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_write_csv, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_merge, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_converge_json, m)?)?;
     m.add_function(wrap_pyfunction!(slurm_shard, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     Ok(())

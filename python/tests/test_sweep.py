@@ -60,7 +60,11 @@ def test_a_killed_sweep_resumes_with_the_points_not_recorded(scenes, tmp_path):
         if not s.startswith("simulation.end_time"):
             args += ["--set", s]
     args += ["--set", "output.every=0.05"]
-    first = subprocess.Popen(args, stderr=subprocess.PIPE, text=True)
+    # The sweep's own SIGINT disposition is the user's: a test run from a background job
+    # (CI's) inherits SIGINT ignored, as a nohup'd sweep would. Ctrl-C in a terminal is what
+    # is tested, so the child starts with the default disposition.
+    default_sigint = lambda: signal.signal(signal.SIGINT, signal.SIG_DFL)
+    first = subprocess.Popen(args, stderr=subprocess.PIPE, text=True, preexec_fn=default_sigint)
     results = tmp_path / "results.jsonl"
     deadline = time.monotonic() + 240
     while len(_lines(results)) < 2 and time.monotonic() < deadline and first.poll() is None:
@@ -184,3 +188,22 @@ def test_the_python_examples_run(tmp_path):
     )
     assert r.returncode == 0, r.stderr[-2000:]
     assert "DBP (N)" in r.stdout and len((tmp_path / "wheel" / "results.csv").read_text().splitlines()) == 3
+
+
+def test_a_spacing_ladder_converges_from_python_and_the_cli(cli, scenes, tmp_path):
+    """Three spacings of the cone scene: one ladder, three levels, from Python and from
+    `regolith sweep converge` alike (the same JSON); a metric the sweep lacks is an InputError."""
+    sets = ["--set", "simulation.end_time=0.1", "--runner", "threads", "--jobs", "2", "--quiet"]
+    cli("sweep", scenes / "cone_penetrometer.toml", "--vary", "sph.spacing=0.012,0.01,0.008", *sets, "--out", tmp_path)
+    ladders = regolith.sweep.converge(tmp_path, "rig.max_force_n")
+    assert len(ladders) == 1
+    l = ladders[0]
+    assert l["fixed"] == {"simulation.end_time": 0.1}
+    assert [h for h, _ in l["levels"]] == [0.012, 0.01, 0.008]
+    assert (l["convergence"] is None) != (l["error"] is None), l
+    r = cli("sweep", "converge", tmp_path, "--metric", "rig.max_force_n")
+    assert "convergence of 1 ladder(s)" in r.stdout
+    on_disk = json.loads((tmp_path / "convergence.json").read_text())
+    assert on_disk["ladders"] == ladders
+    with pytest.raises(regolith.InputError, match="--metric: no finished point"):
+        regolith.sweep.converge(tmp_path, "rig.no_such_value")

@@ -187,6 +187,20 @@ pub enum SweepCommand {
         /// The sweep's output directory.
         dir: PathBuf,
     },
+    /// Observed order and extrapolated limit (Richardson) of a summary value over a
+    /// resolution ladder: points that differ only in `--over` form one ladder each. Writes
+    /// convergence.json in DIR.
+    Converge {
+        /// The sweep's output directory.
+        dir: PathBuf,
+        /// The resolution key the sweep varied.
+        #[arg(long, value_name = "KEY", default_value = "sph.spacing")]
+        over: String,
+        /// The summary value to analyse, named as its results.csv column
+        /// (e.g. `rig.steady_state[0].drawbar_pull`, `runout.runout_m`).
+        #[arg(long, value_name = "COLUMN")]
+        metric: String,
+    },
 }
 
 /// How a sweep's points are run.
@@ -465,6 +479,9 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         }
         Command::Inspect { recording } => inspect::run(&recording),
         Command::Sweep { sub: Some(SweepCommand::Merge { dir }), .. } => sweep::merge(&dir),
+        Command::Sweep { sub: Some(SweepCommand::Converge { dir, over, metric }), .. } => {
+            sweep::converge(&dir, &over, &metric)
+        }
         Command::Sweep { sub: None, args } => sweep::run(args),
         Command::Calibrate { calibrate: CalibrateCommand::Envelope { tests, out } } => calibrate::envelope(tests, out),
         Command::Calibrate { calibrate: CalibrateCommand::Mcc { isotropic, critical, base, out } } => {

@@ -11,6 +11,38 @@ use crate::sweep::{Design, Plan, Shard, merge as merge_dir, parse_vary, run_loca
 /// The Python interpreter the Ray runner is started with: `REGOLITH_PYTHON`, else `python3`.
 pub const PYTHON_ENV: &str = "REGOLITH_PYTHON";
 
+pub(super) fn converge(dir: &Path, over: &str, metric: &str) -> Result<(), Failure> {
+    let ladders = crate::sweep::converge(dir, over, metric)?;
+    for l in &ladders {
+        let fixed: Vec<String> = l.fixed.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        let at = if fixed.is_empty() { "all points".to_string() } else { fixed.join(" ") };
+        let levels: Vec<String> = l.levels.iter().map(|(h, f)| format!("{h}: {f:.6e}")).collect();
+        match &l.convergence {
+            Some(c) => println!(
+                "{at}: {metric} → {:.6e} ± {:.2e} (GCI), order {:.2} (triplets {:.2}–{:.2}) over {} levels [{}]",
+                c.limit,
+                c.gci,
+                c.order,
+                c.order_range.0,
+                c.order_range.1,
+                l.levels.len(),
+                levels.join(", ")
+            ),
+            None => println!("{at}: no estimate: {} [{}]", l.error.as_deref().unwrap_or("?"), levels.join(", ")),
+        }
+        if !l.missing.is_empty() {
+            println!("  points without a value (failed or lacking {metric}): {:?}", l.missing);
+        }
+    }
+    let path = dir.join("convergence.json");
+    let doc = serde_json::json!({ "over": over, "metric": metric, "ladders": ladders });
+    let text =
+        serde_json::to_string_pretty(&doc).map_err(|e| Failure::Run(anyhow::anyhow!("convergence.json: {e}")))?;
+    std::fs::write(&path, text).map_err(|e| Failure::Run(anyhow::anyhow!("writing {}: {e}", path.display())))?;
+    println!("convergence of {} ladder(s) in {}", ladders.len(), path.display());
+    Ok(())
+}
+
 pub(super) fn merge(dir: &Path) -> Result<(), Failure> {
     let n = merge_dir(dir)?;
     println!("merged {n} points into {} and results.csv", dir.join("results.jsonl").display());

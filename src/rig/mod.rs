@@ -91,8 +91,8 @@ pub fn run_rig<T: Real>(scene: &Scene, rig: &RigSpec, driver: &mut Driver<'_, T>
             plate::plate::<T>(scene, *body, *control, *depth, sizes, driver)
         }
         RigSpec::Cone { body, speed, depth } => cone::cone::<T>(scene, *body, *speed, *depth, driver),
-        RigSpec::Wheel { body, load, angular_velocity, drive } => {
-            wheel::wheel::<T>(scene, *body, *load, *angular_velocity, drive, driver)
+        RigSpec::Wheel { body, load, angular_velocity, drive, slip_radius } => {
+            wheel::wheel::<T>(scene, *body, *load, *angular_velocity, drive, *slip_radius, driver)
         }
     }
 }

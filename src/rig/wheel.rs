@@ -47,14 +47,17 @@ pub(super) fn wheel<T: Real>(
     load: f64,
     omega: f64,
     drive: &WheelDrive,
+    slip_radius: Option<f64>,
     driver: &mut Driver<'_, T>,
 ) -> Result<RigOutput<T>, RunError> {
     let g = -scene.solver.gravity[2];
     let g_norm = scene.solver.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let radius = match scene.bodies[body].desc.shape {
+    let rim = match scene.bodies[body].desc.shape {
         ShapeDesc::Wheel { radius, .. } | ShapeDesc::Cylinder { radius, .. } => radius,
         _ => return Err(BuildError::RigShape { rig: "wheel", allowed: "a wheel" }.into()),
     };
+    // The radius of the slip's definition (and of v = ω r (1 − s) in slip mode).
+    let radius = slip_radius.unwrap_or(rim);
     // (prescribed slip, slope in degrees) of each run.
     let cases: Vec<(Option<f64>, Option<f64>)> = match drive {
         WheelDrive::Slips(s) => s.iter().map(|x| (Some(*x), None)).collect(),
@@ -281,7 +284,8 @@ pub(super) fn wheel<T: Real>(
         "type": "wheel",
         "load_n": load,
         "angular_velocity": omega,
-        "radius_m": radius,
+        "radius_m": rim,
+        "slip_radius_m": radius,
         "drive": match drive {
             WheelDrive::Slips(_) => serde_json::json!("slip"),
             WheelDrive::Tow(f) => serde_json::json!({"tow_force": f}),

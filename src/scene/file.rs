@@ -263,4 +263,5 @@ pub(crate) struct RigFile {
     pub slips: Option<Vec<f64>>,
     pub tow_force: Option<f64>,
     pub slopes: Option<Vec<f64>>,
+    pub slip_radius: Option<f64>,
 }

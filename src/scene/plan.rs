@@ -229,7 +229,7 @@ pub fn describe(scene: &Scene) -> String {
                 "cone penetrometer \"{}\" pushed at {speed} m/s to a base depth of {depth} m",
                 scene.bodies[*body].desc.name
             ),
-            super::RigSpec::Wheel { body, load, angular_velocity, drive } => format!(
+            super::RigSpec::Wheel { body, load, angular_velocity, drive, .. } => format!(
                 "single wheel \"{}\", load {load} N, ω = {angular_velocity} rad/s, {}",
                 scene.bodies[*body].desc.name,
                 match drive {

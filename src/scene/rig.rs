@@ -50,6 +50,7 @@ pub(super) fn resolve_rig(
             forbid("slips", r.slips.is_some())?;
             forbid("tow_force", r.tow_force.is_some())?;
             forbid("slopes", r.slopes.is_some())?;
+            forbid("slip_radius", r.slip_radius.is_some())?;
             match shape {
                 ShapeDesc::Cylinder { axis: Axis::Z, .. } | ShapeDesc::Box { .. } => {}
                 _ => {
@@ -84,6 +85,7 @@ pub(super) fn resolve_rig(
                 ("slips", r.slips.is_some()),
                 ("tow_force", r.tow_force.is_some()),
                 ("slopes", r.slopes.is_some()),
+                ("slip_radius", r.slip_radius.is_some()),
             ] {
                 forbid(k, p)?;
             }
@@ -163,6 +165,10 @@ pub(super) fn resolve_rig(
                 load: positive("load", r.load, "N")?,
                 angular_velocity: positive("angular_velocity", r.angular_velocity, "rad/s")?,
                 drive,
+                slip_radius: match r.slip_radius {
+                    None => None,
+                    Some(_) => Some(positive("slip_radius", r.slip_radius, "m")?),
+                },
             }
         }
     })

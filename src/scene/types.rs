@@ -141,6 +141,9 @@ pub enum RigSpec {
         angular_velocity: f64,
         /// Slip list or towing force.
         drive: WheelDrive,
+        /// Radius in the slip `s = 1 − v / (ω r)` (m): the rim's unless given (experiments on
+        /// grousered wheels often use the rim plus the grouser height).
+        slip_radius: Option<f64>,
     },
 }
 

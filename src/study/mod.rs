@@ -1,6 +1,8 @@
 //! Studies: many runs of shipped scenes, checked and tabulated. `stability` runs the hard
-//! cases of `examples/hard/` against the bounds each states in its `[[expect]]` section.
+//! cases of `examples/hard/` against the bounds each states in its `[[expect]]` section;
+//! `convergence` estimates a result's observed order and limit over a resolution ladder.
 
+pub mod convergence;
 pub mod expect;
 mod probe;
 pub mod stability;

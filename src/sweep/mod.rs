@@ -5,11 +5,14 @@
 //!
 //! Layout of a sweep directory: `results.jsonl` (or `results.shard-I-of-N.jsonl`, one line
 //! per finished point, see [`Record`]), `results.csv` (the tidy table), and
-//! `points/<id>/` with each point's own `summary.json`, `series.csv` and plots.
+//! `points/<id>/` with each point's own `summary.json`, `series.csv` and plots, and after
+//! `regolith sweep converge` a `convergence.json` (observed order and limit per ladder).
 
+mod converge;
 mod design;
 mod results;
 
+pub use converge::{Ladder, converge, lookup};
 pub use design::{Design, Values, Vary, parse_vary, points};
 pub use results::{MAX_ARRAY_COLUMNS, Record, Shard, append, merge, read_all, results_file, write_csv};
 
