@@ -224,7 +224,7 @@ fn a_wheel_driven_up_a_slope_balances_the_downhill_load_and_slips_more() {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes/single_wheel.toml"),
     )
     .expect("read")
-    .replace("slips = [0.0, 0.2, 0.4, 0.6]", "slopes = [0.0, 25.0]")
+    .replace("slips = [0.0, 0.2, 0.4, 0.6]", "slopes = [0.0, 25.0]\nslip_radius = 0.11")
     .replace("end_time = 2.0 ", "end_time = 0.6 ")
     .replace("spacing = 0.01", "spacing = 0.02");
     let scene = common::scene(&text);
@@ -233,6 +233,8 @@ fn a_wheel_driven_up_a_slope_balances_the_downhill_load_and_slips_more() {
     let v = serde_json::to_value(&summary).expect("json");
     let rig = &v["rig"];
     assert_eq!(rig["drive"]["slopes_deg"], serde_json::json!([0.0, 25.0]));
+    // Slip is defined with the rim plus the grousers here (0.1 + 0.01 m), as experiments do.
+    assert_eq!((rig["radius_m"].as_f64(), rig["slip_radius_m"].as_f64()), (Some(0.1), Some(0.11)));
     let runs = rig["steady_state"].as_array().expect("runs");
     assert_eq!(runs.len(), 2);
     let num = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} in {r}"));

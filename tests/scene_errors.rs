@@ -374,7 +374,7 @@ fn body_and_rig_scene_is_valid() {
 
 #[test]
 fn body_and_rig_errors() {
-    let cases: [(&str, &str, &str, &str); 12] = [
+    let cases: [(&str, &str, &str, &str); 13] = [
         (
             "mass = 2.0",
             "mass = 2.0\nactive_margin = -0.05",
@@ -422,6 +422,12 @@ fn body_and_rig_errors() {
             "slips = [0.0, 0.3]\nslopes = [10.0]",
             "{}:35: key `rig.slips`: and slopes are both given: prescribe slips, tow the carriage, or drive up slopes",
             "slips_and_slopes",
+        ),
+        (
+            "slips = [0.0, 0.3]",
+            "slips = [0.0, 0.3]\nslip_radius = -0.1",
+            "{}:36: key `rig.slip_radius`: must be > 0 m (got -0.1)",
+            "slip_radius_negative",
         ),
         (
             "slips = [0.0, 0.3]",
