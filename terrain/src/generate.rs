@@ -11,8 +11,8 @@
 //! included), `σzz = −Σ ρ |g_z| d0`, and `σxx = σyy = K0 σzz` with the particle's material K0.
 //! A tilted gravity (a slope modelled by tilting g over a level bed) adds the shear that holds
 //! the layer against gravity's tangential part, `σxz = −Σ ρ g_x d0` and `σyz = −Σ ρ g_y d0`
-//! (the infinite-slope state: `∂σ_iz/∂z + ρ g_i = 0`), so a bed steeper than nothing still
-//! starts in equilibrium. MCC points get `p_c0 = OCR · p0` and their specific volume from the
+//! (the infinite-slope state: `∂σ_iz/∂z + ρ g_i = 0`), so a tilted bed starts in
+//! equilibrium too. MCC points get `p_c0 = OCR · p0` and their specific volume from the
 //! compression lines.
 
 use std::collections::{BTreeMap, HashMap};
@@ -244,14 +244,20 @@ mod tests {
         .expect("valid")
     }
 
-    #[test]
-    fn bed_has_the_right_count_and_geostatic_stress() {
+    /// A 0.2 × 0.1 × 0.2 m container with a flat bed of dp() soil 0.1 m deep.
+    fn flat_bed() -> (Aabb, [RegionSpec; 1]) {
         let c = Aabb { min: [0.0; 3], max: [0.2, 0.1, 0.2] };
-        let regions = [RegionSpec {
+        let bed = RegionSpec {
             region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) },
             material: 0,
             velocity: [0.0; 3],
-        }];
+        };
+        (c, [bed])
+    }
+
+    #[test]
+    fn bed_has_the_right_count_and_geostatic_stress() {
+        let (c, regions) = flat_bed();
         let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &regions, &[dp()]).expect("builds");
         // 19 × 9 interior columns, 10 layers.
         assert_eq!(b.particles.len(), 19 * 9 * 10);
@@ -267,12 +273,7 @@ mod tests {
     #[test]
     fn a_tilted_gravity_gives_the_infinite_slope_state() {
         // g tilted by 10° about y (a 10° slope rising towards +x) and 4° about x.
-        let c = Aabb { min: [0.0; 3], max: [0.2, 0.1, 0.2] };
-        let regions = [RegionSpec {
-            region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) },
-            material: 0,
-            velocity: [0.0; 3],
-        }];
+        let (c, regions) = flat_bed();
         let (a, b) = (10f64.to_radians(), 4f64.to_radians());
         let g = [-9.81 * a.sin(), 9.81 * b.sin(), -9.81 * a.cos() * b.cos()];
         let built = build_terrain(&c, 0.01, 3, g, &regions, &[dp()]).expect("builds");
