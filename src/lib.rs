@@ -19,7 +19,10 @@
 //!     standard errors, the Mohr–Coulomb envelope);
 //! 12. [`error`]: the facade [`Error`] over every stage's error type;
 //! 13. [`sweep`]: one scene at many points (grid or Latin hypercube), resumable, in shards;
-//! 14. [`bench`](mod@bench), [`cli`]: the benchmark and the command-line tool.
+//! 14. [`accuracy`]: what accuracy costs in time — d0 ladders and knobs over the cases of
+//!     `examples/study/`, run through the sweep runner, against closed forms, experiments or
+//!     their own Richardson limit;
+//! 15. [`bench`](mod@bench), [`cli`]: the benchmark and the command-line tool.
 //!
 //! `tests/architecture.rs` fails on an import against this order.
 //!
@@ -28,6 +31,7 @@
 //! them off: `default-features = false`.
 #![warn(missing_docs)]
 
+pub mod accuracy;
 pub mod bench;
 pub mod build;
 pub mod calibrate;

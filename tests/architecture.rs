@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 /// The root crate's top-level modules, in the order the data flows.
 /// `error`, the facade's error type, gathers the stages' own error types, so it comes after them.
-const LAYERS: [&str; 16] = [
+const LAYERS: [&str; 17] = [
     "input",
     "material",
     "element",
@@ -22,6 +22,7 @@ const LAYERS: [&str; 16] = [
     "calibrate",
     "error",
     "sweep",
+    "accuracy",
     "bench",
     "cli",
 ];

@@ -4,6 +4,8 @@
 
 mod common;
 
+#[path = "accuracy.rs"]
+mod accuracy;
 #[path = "active.rs"]
 mod active;
 #[path = "architecture.rs"]

@@ -169,6 +169,7 @@ pub fn isotropic_figure(d: &IsotropicData, f: &IsotropicFit) -> Figure {
             x_label: "mean pressure p (Pa)".into(),
             y_label: "specific volume v".into(),
             x_log: true,
+            y_log: false,
             series: vec![
                 Series::points("data", d.p.iter().copied().zip(d.v.iter().copied()).collect()),
                 Series::line(format!("NCL: λ = {:.4}, v_λ = {:.4}", f.lambda, f.v_lambda), ncl),
@@ -267,6 +268,7 @@ pub fn mohr_figure(s3: &[f64], s1: &[f64], f: &MohrCoulomb) -> Figure {
             x_label: "normal stress σ (Pa)".into(),
             y_label: "shear stress τ (Pa)".into(),
             x_log: false,
+            y_log: false,
             series,
             x_range: Some((0.0, x_max)),
             y_range: Some((0.0, y_max)),

@@ -142,6 +142,38 @@ pub enum StudyCommand {
         #[arg(long, value_name = "DIR", default_value = "out/stability")]
         out: PathBuf,
     },
+    /// What accuracy costs in time: each case's d0 ladder and knobs, errors against closed
+    /// forms, experiments or the ladder's Richardson limit; writes accuracy.csv, accuracy.json,
+    /// accuracy.md and plots. Resumes: finished points are not run again.
+    Accuracy {
+        /// Cases to run (file stems, comma-separated; default: every case with a section for
+        /// the budget).
+        #[arg(long, value_name = "NAME,...", value_delimiter = ',')]
+        cases: Vec<String>,
+        /// Budget: which ladders and knobs (quick runs in CI in minutes).
+        #[arg(long, value_enum, default_value_t = BudgetArg::Standard)]
+        budget: BudgetArg,
+        /// Points run at once (threads of this process).
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        jobs: usize,
+        /// Folder of case files.
+        #[arg(long, value_name = "DIR", default_value = "examples/study")]
+        cases_dir: PathBuf,
+        /// Output folder.
+        #[arg(long, value_name = "DIR", default_value = "out/accuracy")]
+        out: PathBuf,
+    },
+}
+
+/// Budgets of the accuracy study.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BudgetArg {
+    /// Minutes on 2 cores (CI).
+    Quick,
+    /// The shipped study (docs/accuracy).
+    Standard,
+    /// Finer ladders, more knobs.
+    Full,
 }
 
 /// Calibrations.
@@ -295,7 +327,8 @@ pub enum Command {
         #[command(subcommand)]
         calibrate: CalibrateCommand,
     },
-    /// Studies over shipped scenes: `stability` (the hard-case suite).
+    /// Studies over shipped scenes: `stability` (the hard-case suite), `accuracy` (error
+    /// against cost over d0 ladders and knobs).
     Study {
         /// Which study.
         #[command(subcommand)]
@@ -493,6 +526,14 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 SizeArg::Full => "full",
             };
             study::stability_cmd(cases_dir, cases, size.into(), out)
+        }
+        Command::Study { study: StudyCommand::Accuracy { cases, budget, jobs, cases_dir, out } } => {
+            let budget = match budget {
+                BudgetArg::Quick => "quick",
+                BudgetArg::Standard => "standard",
+                BudgetArg::Full => "full",
+            };
+            study::accuracy_cmd(cases_dir, cases, budget.into(), jobs, out)
         }
     }
 }

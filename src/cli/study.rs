@@ -1,4 +1,4 @@
-//! `regolith study stability`.
+//! `regolith study stability` and `regolith study accuracy`.
 
 use std::path::PathBuf;
 
@@ -33,5 +33,47 @@ pub(super) fn stability_cmd(cases_dir: PathBuf, cases: Vec<String>, size: String
         Ok(())
     } else {
         Err(Failure::Run(anyhow!("cases failing their bounds: {}", failed.join(", "))))
+    }
+}
+
+pub(super) fn accuracy_cmd(
+    cases_dir: PathBuf,
+    cases: Vec<String>,
+    budget: String,
+    jobs: usize,
+    out: PathBuf,
+) -> Result<(), Failure> {
+    let opts = crate::accuracy::AccuracyOptions { cases_dir, cases, budget, jobs, out: out.clone(), quiet: false };
+    let a = crate::accuracy::accuracy(&opts).map_err(|e| match e {
+        StudyError::Input(e) => Failure::Input(e),
+        e => Failure::Run(anyhow::Error::new(e)),
+    })?;
+    let mut failed = Vec::new();
+    for c in &a.cases {
+        let n_failed = c.rows.iter().filter(|r| r.failure.is_some()).count();
+        if n_failed > 0 {
+            failed.push(format!("{} ({n_failed} of {})", c.case, c.rows.len()));
+        }
+        let best = c.cheapest.iter().find(|(t, _)| *t == 0.05).and_then(|(_, i)| *i);
+        println!(
+            "{}: order {:.2} ({}); within 5 %: {}",
+            c.case,
+            c.order.order,
+            c.order.method,
+            best.map_or("not reached".to_string(), |i| {
+                let r = &c.rows[i];
+                if r.knob == "d0" {
+                    format!("d0 = {} ({:.1} s)", r.setting, r.wall_s)
+                } else {
+                    format!("{} = {} at d0 = {} ({:.1} s)", r.knob, r.setting, r.d0, r.wall_s)
+                }
+            })
+        );
+    }
+    println!("table in {}", out.join("accuracy.md").display());
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(Failure::Run(anyhow!("points failed in: {} (see accuracy.md)", failed.join(", "))))
     }
 }

@@ -45,6 +45,8 @@ pub struct Panel {
     pub y_label: String,
     /// Logarithmic x axis.
     pub x_log: bool,
+    /// Logarithmic y axis.
+    pub y_log: bool,
     /// Data.
     pub series: Vec<Series>,
     /// Fixed x range; computed from the data when `None`.

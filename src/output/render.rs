@@ -51,8 +51,9 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
     let xr = panel
         .x_range
         .unwrap_or_else(|| range(panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)), panel.x_log));
-    let yr =
-        panel.y_range.unwrap_or_else(|| range(panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)), false));
+    let yr = panel
+        .y_range
+        .unwrap_or_else(|| range(panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)), panel.y_log));
     let mut builder = ChartBuilder::on(area);
     builder.caption(&panel.title, ("sans-serif", 20)).margin(12).x_label_area_size(44).y_label_area_size(70);
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
@@ -73,7 +74,9 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
                     .points
                     .iter()
                     .copied()
-                    .filter(|(x, y)| x.is_finite() && y.is_finite() && (!panel.x_log || *x > 0.0))
+                    .filter(|(x, y)| {
+                        x.is_finite() && y.is_finite() && (!panel.x_log || *x > 0.0) && (!panel.y_log || *y > 0.0)
+                    })
                     .collect();
                 match s.style {
                     Style::Line => chart
@@ -100,10 +103,13 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
             }
         }};
     }
-    if panel.x_log {
-        body!(builder.build_cartesian_2d((xr.0..xr.1).log_scale(), yr.0..yr.1).map_err(e)?);
-    } else {
-        body!(builder.build_cartesian_2d(xr.0..xr.1, yr.0..yr.1).map_err(e)?);
+    match (panel.x_log, panel.y_log) {
+        (true, true) => {
+            body!(builder.build_cartesian_2d((xr.0..xr.1).log_scale(), (yr.0..yr.1).log_scale()).map_err(e)?)
+        }
+        (true, false) => body!(builder.build_cartesian_2d((xr.0..xr.1).log_scale(), yr.0..yr.1).map_err(e)?),
+        (false, true) => body!(builder.build_cartesian_2d(xr.0..xr.1, (yr.0..yr.1).log_scale()).map_err(e)?),
+        (false, false) => body!(builder.build_cartesian_2d(xr.0..xr.1, yr.0..yr.1).map_err(e)?),
     }
     Ok(())
 }

@@ -24,6 +24,12 @@ struct PlateRun {
     max_sinkage: f64,
     /// Largest pressure (Pa).
     max_pressure: f64,
+    /// The plate's width B (m): the diameter of a circular plate, the short side of a
+    /// rectangular one.
+    width: f64,
+    /// Mean pressure over the sinkages within ±10 % of 0.1 B (Pa), where bearing capacity is
+    /// read for a plate punching into soil; `None` when the run did not reach 0.11 B.
+    pressure_at_tenth_width: Option<f64>,
     /// (sinkage m, pressure Pa), every exchange.
     curve: Vec<(f64, f64)>,
 }
@@ -95,7 +101,12 @@ pub(super) fn plate<T: Real>(
                 break;
             }
         }
-        runs.push(PlateRun { b, area, max_sinkage: zmax, max_pressure: pmax, curve });
+        let width = match &sc.bodies[body].desc.shape {
+            ShapeDesc::Cylinder { radius, .. } => 2.0 * radius,
+            _ => b,
+        };
+        let pressure_at_tenth_width = mean_pressure_near(&curve, 0.1 * width, 0.1);
+        runs.push(PlateRun { b, area, max_sinkage: zmax, max_pressure: pmax, width, pressure_at_tenth_width, curve });
         last = Some(sim);
         if stopped.is_some() {
             break;
@@ -135,4 +146,29 @@ pub(super) fn plate<T: Real>(
         last,
         stopped,
     })
+}
+
+/// The mean pressure of the curve's points with sinkage within `rel` of `z` (`None` when the
+/// curve does not reach `z (1 + rel)`, or holds no point there).
+fn mean_pressure_near(curve: &[(f64, f64)], z: f64, rel: f64) -> Option<f64> {
+    if curve.iter().all(|(s, _)| *s < z * (1.0 + rel)) {
+        return None;
+    }
+    let near: Vec<f64> = curve.iter().filter(|(s, _)| (s - z).abs() <= rel * z).map(|(_, p)| *p).collect();
+    (!near.is_empty()).then(|| near.iter().sum::<f64>() / near.len() as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_pressure_at_a_tenth_of_the_width_is_read_where_the_curve_reaches_it() {
+        // Sinkages (i + ½)·0.1 mm, pressures i kPa.
+        let curve: Vec<(f64, f64)> = (0..=120).map(|i| ((i as f64 + 0.5) * 1e-4, 1000.0 * i as f64)).collect();
+        // Within 9–11 mm: i = 90..=109, mean 99.5 kPa.
+        let p = mean_pressure_near(&curve, 0.01, 0.1).expect("reached");
+        assert!((p - 99_500.0).abs() < 1e-6, "{p}");
+        assert_eq!(mean_pressure_near(&curve[..105], 0.01, 0.1), None, "stops at 10.45 mm, short of 11");
+    }
 }

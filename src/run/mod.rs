@@ -5,7 +5,7 @@
 
 mod summary;
 
-pub use summary::{BodySummary, Runout, SUMMARY_SCHEMA_VERSION, Summary};
+pub use summary::{BodySummary, Geostatic, Runout, SUMMARY_SCHEMA_VERSION, Summary};
 
 pub use crate::driver::{RunError, StopToken};
 
@@ -162,6 +162,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
         particles: fluid.map_or(0, |f| f.len()),
         markers: fluid.map_or(0, |f| f.marker_positions().len()),
         steps: stats.steps,
+        particle_steps: stats.particle_steps,
         sim_time: sim.as_ref().map_or(0.0, |s| s.time()),
         wall_time_s: wall,
         particle_steps_per_s: if wall > 0.0 { stats.particle_steps / wall } else { 0.0 },
@@ -199,6 +200,10 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
         error: failure.as_ref().map(|e| e.to_string()),
         runout: match (fluid, &initial) {
             (Some(f), Some(i)) => summary::column_runout(scene, i, f),
+            _ => None,
+        },
+        geostatic: match (fluid, &initial) {
+            (Some(f), Some(_)) => summary::geostatic_state(scene, f),
             _ => None,
         },
         bodies: sim.as_ref().map(body_summaries).unwrap_or_default(),

@@ -47,6 +47,28 @@ pub struct Runout {
     pub final_height: f64,
 }
 
+/// The stresses of a flat bed at mid-depth against the geostatic state: the closed form
+/// σv = ρ g depth and σh = K0 σv. Read from the particles of the lattice layer nearest
+/// mid-depth, three spacings or more from the side walls (the walls' own stress layer is left
+/// out); depth is measured from the top particle plus half a spacing.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Geostatic {
+    /// Depth of the measured layer below the soil surface (m).
+    pub depth: f64,
+    /// Particles averaged.
+    pub particles: usize,
+    /// Mean vertical stress −σzz there (Pa, compression positive).
+    pub sigma_v: f64,
+    /// The closed form ρ |g| depth (Pa), with the material's reference density.
+    pub sigma_v_expected: f64,
+    /// σv over its closed form.
+    pub sigma_v_ratio: f64,
+    /// Mean horizontal over vertical stress, (σxx + σyy) / (2 σzz).
+    pub k_ratio: f64,
+    /// The material's at-rest coefficient K0 (Jáky's 1 − sin φ for frictional models).
+    pub k0: f64,
+}
+
 /// `summary.json`.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct Summary {
@@ -66,6 +88,9 @@ pub struct Summary {
     pub markers: usize,
     /// Steps taken.
     pub steps: u64,
+    /// Soil particles integrated, summed over the steps (the awake ones when an active region
+    /// is kept).
+    pub particle_steps: f64,
     /// Simulated time reached (s).
     pub sim_time: f64,
     /// Wall-clock time of the stepping loop (s).
@@ -101,6 +126,9 @@ pub struct Summary {
     pub error: Option<String>,
     /// Column-collapse runout, for scenes whose soil is one cylinder.
     pub runout: Option<Runout>,
+    /// Mid-depth stresses of a bed at rest, for scenes whose soil is one flat bed and that
+    /// hold no body.
+    pub geostatic: Option<Geostatic>,
     /// Bodies at the end.
     pub bodies: Vec<BodySummary>,
     /// The rig's report, if the scene has a rig.
@@ -174,5 +202,58 @@ pub(super) fn column_runout<T: Real>(scene: &Scene, initial: &[[f64; 3]], s: &dy
         normalized: (rf - r0) / r0,
         lube_2004: lube,
         final_height: near_axis,
+    })
+}
+
+/// The mid-depth state of a flat bed at rest (see [`Geostatic`]); `None` for other scenes, and
+/// when the layer holds no central particle (a box narrower than six spacings).
+pub(super) fn geostatic_state<T: Real>(scene: &Scene, s: &dyn SphSolver<T>) -> Option<Geostatic> {
+    if scene.soil.len() != 1 || !scene.bodies.is_empty() || scene.rig.is_some() {
+        return None;
+    }
+    let SoilRegion::Bed { container, surface: regolith_terrain::Surface::Flat(_) } = &scene.soil[0].region else {
+        return None;
+    };
+    let g = scene.solver.gravity;
+    if g[0] != 0.0 || g[1] != 0.0 || g[2] >= 0.0 {
+        return None;
+    }
+    let d0 = scene.solver.spacing;
+    let n = s.active();
+    let pos = &s.positions()[..n];
+    let zmax = pos.iter().map(|p| p.as_f64()[2]).fold(f64::MIN, f64::max);
+    let zmin = pos.iter().map(|p| p.as_f64()[2]).fold(f64::MAX, f64::min);
+    let top = zmax + 0.5 * d0;
+    // The lattice layer (zmin + k d0) nearest mid-depth of the particle centres.
+    let mid_z = zmin + ((0.5 * (zmax - zmin)) / d0).round() * d0;
+    let (lo, hi) = (container.min, container.max);
+    let (mut sv, mut sh, mut z_sum, mut count) = (0.0, 0.0, 0.0, 0usize);
+    for (i, p) in pos.iter().enumerate() {
+        let p = p.as_f64();
+        let central =
+            p[0] > lo[0] + 3.0 * d0 && p[0] < hi[0] - 3.0 * d0 && p[1] > lo[1] + 3.0 * d0 && p[1] < hi[1] - 3.0 * d0;
+        if central && (p[2] - mid_z).abs() < 0.25 * d0 {
+            let sig = s.stresses()[i].as_f64();
+            sv -= sig[2];
+            sh -= 0.5 * (sig[0] + sig[1]);
+            z_sum += p[2];
+            count += 1;
+        }
+    }
+    if count == 0 {
+        return None;
+    }
+    let c = count as f64;
+    let material = &s.materials()[scene.soil[0].material];
+    let depth = top - z_sum / c;
+    let expected = material.density.as_f64() * (-g[2]) * depth;
+    Some(Geostatic {
+        depth,
+        particles: count,
+        sigma_v: sv / c,
+        sigma_v_expected: expected,
+        sigma_v_ratio: sv / c / expected,
+        k_ratio: sh / sv,
+        k0: material.k0().as_f64(),
     })
 }

@@ -28,6 +28,10 @@ pub(crate) struct SceneFile {
     /// Problem sizes of a study case (`[study.ci]`), read by `regolith study`; a run ignores it.
     #[serde(rename = "study")]
     pub _study: Option<serde::de::IgnoredAny>,
+    /// What an accuracy case measures and its ladders (`[accuracy]`), read by
+    /// `regolith study accuracy`; a run ignores it.
+    #[serde(rename = "accuracy")]
+    pub _accuracy: Option<serde::de::IgnoredAny>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -42,11 +42,13 @@ pub enum StudyError {
 }
 
 impl StudyError {
-    fn output(path: &Path, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+    /// An output error about a file.
+    pub fn output(path: &Path, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
         Self::Output { path: path.to_path_buf(), source: source.into() }
     }
 }
 
-fn write_text(path: &Path, text: &str) -> Result<(), StudyError> {
+/// Writes a text file, as a study error naming it.
+pub fn write_text(path: &Path, text: &str) -> Result<(), StudyError> {
     std::fs::write(path, text).map_err(|e| StudyError::output(path, e))
 }

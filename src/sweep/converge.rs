@@ -128,6 +128,7 @@ mod tests {
             status: if value.is_some() { "ok" } else { "failed" }.into(),
             overrides,
             wall_s: 1.0,
+            peak_mem_bytes: None,
             error: None,
             out: String::new(),
             summary: value.map(|v| serde_json::json!({"rig": {"steady_state": [{"drawbar_pull": v}]}})),

@@ -10,10 +10,12 @@
 
 mod converge;
 mod design;
+mod memory;
 mod results;
 
 pub use converge::{Ladder, converge, lookup};
 pub use design::{Design, Values, Vary, parse_vary, points};
+pub use memory::{peak_rss_bytes, reset_peak_rss};
 pub use results::{MAX_ARRAY_COLUMNS, Record, Shard, append, merge, read_all, results_file, write_csv};
 
 use std::collections::BTreeMap;
@@ -88,9 +90,34 @@ impl Plan {
         Ok(Self { scene: scene.to_path_buf(), source, points })
     }
 
+    /// A plan of explicit points: each list of overrides is one point, in order (the accuracy
+    /// study's ladders and one-knob changes). The scene file must read as TOML.
+    pub fn from_overrides(scene: &Path, lists: Vec<Vec<(String, toml::Value)>>) -> Result<Self, InputError> {
+        let source = read_text(scene)?;
+        let _: toml::Table = crate::input::parse_toml(scene, &source)?;
+        let points = lists
+            .into_iter()
+            .enumerate()
+            .map(|(index, o)| Point { index, id: config_hash(&source, &o), overrides: o })
+            .collect();
+        Ok(Self { scene: scene.to_path_buf(), source, points })
+    }
+
     /// Runs point `p`, writing its outputs under `out/points/<id>/`. Never fails: a bad value
-    /// or a failed run is the record's `error`.
+    /// or a failed run is the record's `error`. No peak memory is recorded (other points may
+    /// share the process); see [`Plan::run_point_alone`].
     pub fn run_point(&self, p: &Point, out: &Path) -> Record {
+        self.run_point_measured(p, out, false)
+    }
+
+    /// [`Plan::run_point`] for a point that has the process to itself: the process's peak
+    /// resident memory is reset before it runs and recorded after (`peak_mem_bytes`).
+    pub fn run_point_alone(&self, p: &Point, out: &Path) -> Record {
+        self.run_point_measured(p, out, true)
+    }
+
+    fn run_point_measured(&self, p: &Point, out: &Path, alone: bool) -> Record {
+        let measure = alone && reset_peak_rss();
         let t0 = Instant::now();
         let dir = Path::new("points").join(&p.id);
         let mut rec = Record {
@@ -99,6 +126,7 @@ impl Plan {
             status: "failed".into(),
             overrides: p.overrides.iter().map(|(k, v)| (k.clone(), toml_to_json(v))).collect::<BTreeMap<_, _>>(),
             wall_s: 0.0,
+            peak_mem_bytes: None,
             error: None,
             out: dir.display().to_string(),
             summary: None,
@@ -128,6 +156,9 @@ impl Plan {
             }
         }
         rec.wall_s = t0.elapsed().as_secs_f64();
+        if measure {
+            rec.peak_mem_bytes = peak_rss_bytes();
+        }
         rec
     }
 
@@ -233,7 +264,7 @@ pub fn run_local(
                     if let Ok(mut g) = state.lock() {
                         g.0.running += 1;
                     }
-                    let rec = plan.run_point(p, out);
+                    let rec = if jobs <= 1 { plan.run_point_alone(p, out) } else { plan.run_point(p, out) };
                     let Ok(mut g) = state.lock() else { break };
                     let written = append(&file, &rec);
                     if let Err(e) = written {

@@ -22,6 +22,11 @@ pub struct Record {
     pub overrides: BTreeMap<String, serde_json::Value>,
     /// Wall-clock time of the point (s), loading and writing included.
     pub wall_s: f64,
+    /// Peak resident memory of the process while the point ran (bytes, Linux): recorded when
+    /// the point ran alone (one job), since points running side by side share one process's
+    /// memory; `None` otherwise and where the system does not say.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_mem_bytes: Option<u64>,
     /// The one-line error of a failed point.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
@@ -210,6 +215,7 @@ pub fn write_csv(out: &Path, records: &[Record]) -> Result<(), InputError> {
     let mut header = vec!["point".to_string(), "id".into(), "status".into()];
     header.extend(keys.iter().map(|k| format!("set:{k}")));
     header.push("wall_s".into());
+    header.push("peak_mem_bytes".into());
     header.extend(columns.iter().cloned());
     header.push("error".into());
     let mut text = header.iter().map(|h| quote(h)).collect::<Vec<_>>().join(",");
@@ -218,6 +224,7 @@ pub fn write_csv(out: &Path, records: &[Record]) -> Result<(), InputError> {
         let mut cells = vec![r.point.to_string(), r.id.clone(), r.status.clone()];
         cells.extend(keys.iter().map(|k| row.get(&format!("set:{k}")).cloned().unwrap_or_default()));
         cells.push(format!("{}", r.wall_s));
+        cells.push(r.peak_mem_bytes.map(|b| b.to_string()).unwrap_or_default());
         cells.extend(columns.iter().map(|c| row.get(c).cloned().unwrap_or_default()));
         cells.push(r.error.clone().unwrap_or_default());
         text.push_str(&cells.iter().map(|c| quote(c)).collect::<Vec<_>>().join(","));
