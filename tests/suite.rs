@@ -16,6 +16,8 @@ mod cli_errors;
 mod column_collapse;
 #[path = "conservation.rs"]
 mod conservation;
+#[path = "contact.rs"]
+mod contact;
 #[path = "coupling.rs"]
 mod coupling;
 #[path = "element_dp.rs"]

@@ -102,6 +102,32 @@ impl Shifting {
     }
 }
 
+/// How soil slides along a wall or a body's markers.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum WallContact {
+    /// No slip (Adami's mirrored velocity), and the full extrapolated stress: the soil holds
+    /// to the wall as it holds to itself (adhesive for cohesive soil).
+    #[default]
+    Rough,
+    /// Free slip: no tangential traction, the tangential velocity carried through.
+    Smooth,
+    /// Coulomb friction: sliding soil meets a tangential traction of μ times the compressive
+    /// normal one; below that the wall holds it (regularised: a creep of τ / (ρ c), see the
+    /// CPU kernel). Free slip kinematics, so the wall adds no shear rate of its own.
+    Friction(f64),
+}
+
+impl WallContact {
+    /// The friction coefficient: `INFINITY` for rough, 0 for smooth.
+    pub fn mu(self) -> f64 {
+        match self {
+            Self::Rough => f64::INFINITY,
+            Self::Smooth => 0.0,
+            Self::Friction(m) => m,
+        }
+    }
+}
+
 /// Everything the SPH solver needs besides particles and materials.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SolverConfig {

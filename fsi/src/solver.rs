@@ -81,6 +81,24 @@ pub trait SphSolver<T: Real>: Send {
             Some(_) => Err(SolverError::Setup(format!("the {} backend has no active domains", self.backend()))),
         }
     }
+    /// How soil slides along the markers of each owner (`contact[0]` the fixed walls,
+    /// `contact[k + 1]` body k; owners past the end are rough), with each marker's wall normal
+    /// into the soil (original order; zero or missing: rough). Backends without smooth or
+    /// frictional walls refuse anything but rough.
+    fn set_wall_contact(
+        &mut self,
+        contact: &[crate::config::WallContact],
+        normals: &[[f64; 3]],
+    ) -> Result<(), SolverError> {
+        let _ = normals;
+        match contact.iter().find(|c| **c != crate::config::WallContact::Rough) {
+            None => Ok(()),
+            Some(c) => Err(SolverError::Setup(format!(
+                "the {} backend has rough walls only ({c:?} asked for); use backend = \"cpu\"",
+                self.backend()
+            ))),
+        }
+    }
     /// Classifications of the active region so far (0 without one).
     fn classifications(&self) -> u64 {
         0
@@ -197,6 +215,13 @@ impl<T: Real> SphSolver<T> for CpuSph<T> {
     }
     fn classifications(&self) -> u64 {
         CpuSph::classifications(self)
+    }
+    fn set_wall_contact(
+        &mut self,
+        contact: &[crate::config::WallContact],
+        normals: &[[f64; 3]],
+    ) -> Result<(), SolverError> {
+        CpuSph::set_wall_contact(self, contact, normals)
     }
     fn place_bodies(&mut self, bodies: &[BodyMarkers<'_>], states: &[BodyState]) {
         place_on_host(self, bodies, states);

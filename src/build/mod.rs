@@ -72,6 +72,17 @@ pub enum BuildError {
         /// The backend of the run.
         backend: String,
     },
+    /// Smooth or frictional soil contact was asked for on a backend without it.
+    #[error(
+        "{}: key `soil_contact`: smooth and frictional walls run on the CPU backend only (this run is on {backend}); set [simulation] backend = \"cpu\" or remove soil_contact",
+        file.display()
+    )]
+    ContactBackend {
+        /// The scene file.
+        file: std::path::PathBuf,
+        /// The backend of the run.
+        backend: String,
+    },
     /// Terrain scenes need a container.
     #[error("a scene needs a [container]")]
     NoContainer,
@@ -176,8 +187,54 @@ pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, Terrai
 pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, BuildError> {
     let (mats, terrain) = scene_terrain::<T>(scene)?;
     let wgpu = scene.backend == Backend::Wgpu;
-    let solver = backend::make_solver(wgpu, scene.solver, mats, &terrain.particles, &terrain.markers, terrain.domain)?;
+    let mut solver =
+        backend::make_solver(wgpu, scene.solver, mats, &terrain.particles, &terrain.markers, terrain.domain)?;
+    set_contacts(solver.as_mut(), scene, &[scene.wall_contact], &terrain)?;
     Ok(SoilModel { solver, terrain })
+}
+
+/// Hands the walls' and bodies' soil contacts to the solver (owner 0 the walls, k + 1 the k-th
+/// FSI body); a backend with rough walls only refuses the others with the keys named.
+fn set_contacts<T: Real>(
+    solver: &mut dyn SphSolver<T>,
+    scene: &Scene,
+    contacts: &[regolith_fsi::config::WallContact],
+    terrain: &TerrainBuild,
+) -> Result<(), BuildError> {
+    let all_rough = contacts.iter().all(|c| *c == regolith_fsi::config::WallContact::Rough);
+    if all_rough {
+        return Ok(());
+    }
+    if solver.backend() != "cpu" {
+        return Err(BuildError::ContactBackend { file: scene.path.clone(), backend: solver.backend().into() });
+    }
+    let normals = wall_normals(terrain, scene.solver.spacing);
+    solver.set_wall_contact(contacts, &normals).map_err(BuildError::Solver)
+}
+
+/// The unit normal into the container at each wall marker (the terrain's markers, which come
+/// first in the solver's marker order): the sum of the inward normals of the faces whose plane
+/// the marker lies on or behind (markers sit on the lattice, the first layer on each wall
+/// plane), normalised, so that edges and corners get the diagonal.
+fn wall_normals(terrain: &TerrainBuild, d0: f64) -> Vec<[f64; 3]> {
+    let c = &terrain.container;
+    terrain
+        .markers
+        .iter()
+        .map(|m| {
+            let mut n = [0.0_f64; 3];
+            for a in 0..3 {
+                if m.pos[a] <= c.min[a] + 0.5 * d0 {
+                    n[a] += 1.0;
+                }
+                if m.pos[a] >= c.max[a] - 0.5 * d0 {
+                    n[a] -= 1.0;
+                }
+            }
+            let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            if l > 0.0 { n.map(|x| x / l) } else { n }
+        })
+        .collect()
 }
 
 /// Everything a simulation of a scene is made of: what `sim::Simulation` holds.
@@ -274,6 +331,9 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
     let active = active_domain(&scene, &fsi_bodies);
     let make = |c, m, p: &[_], mk: &[_], d| backend::make_solver::<T>(wgpu, c, m, p, mk, d);
     let mut system = FsiSystem::with_solver(soil, rigid, fsi_bodies, scene.exchange_interval, &make)?;
+    let contacts: Vec<_> =
+        std::iter::once(scene.wall_contact).chain(scene.bodies.iter().filter(|b| b.fsi).map(|b| b.contact)).collect();
+    set_contacts(system.fluid.as_mut(), &scene, &contacts, &terrain)?;
     if let Some(a) = active {
         if system.fluid.backend() != "cpu" {
             return Err(BuildError::ActiveBackend { file: scene.path.clone(), backend: system.fluid.backend().into() });

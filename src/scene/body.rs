@@ -150,6 +150,21 @@ pub(super) fn resolve_body(
             return Err(e("active_margin", format!("must be >= 0 m (got {m})")));
         }
     }
+    let contact = match &b.soil_contact {
+        None => WallContact::Rough,
+        Some(_) if !fsi => {
+            return Err(e("soil_contact", "is set but fsi = false (the body does not touch the soil)".into()));
+        }
+        Some(v) => match contact::parse_contact(v).map_err(|m| e("soil_contact", m))? {
+            WallContact::Rough => WallContact::Rough,
+            _ => {
+                return Err(e(
+                    "soil_contact",
+                    "bodies have rough soil contact only so far (smooth and frictional contact is for [container] walls); remove it or set \"rough\"".into(),
+                ));
+            }
+        },
+    };
     let friction = b.friction.unwrap_or(0.5);
     if !(friction.is_finite() && friction >= 0.0) {
         return Err(e("friction", format!("must be ≥ 0 (got {friction})")));
@@ -170,5 +185,6 @@ pub(super) fn resolve_body(
         visual: None,
         initial_velocity,
         active_margin: b.active_margin,
+        contact,
     })
 }

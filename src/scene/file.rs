@@ -144,6 +144,7 @@ pub(crate) enum ShiftingName {
 pub(crate) struct ContainerFile {
     pub min: Option<[f64; 3]>,
     pub max: Option<[f64; 3]>,
+    pub soil_contact: Option<toml::Value>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -189,6 +190,7 @@ pub(crate) struct BodyFile {
     pub bce_layers: Option<i64>,
     pub friction: Option<f64>,
     pub active_margin: Option<f64>,
+    pub soil_contact: Option<toml::Value>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]

@@ -36,6 +36,7 @@
 //! ```
 
 mod body;
+mod contact;
 mod file;
 mod output;
 pub mod overrides;
@@ -60,7 +61,7 @@ pub use vehicle::{Profile, VehicleSpec, WheelSpec};
 
 use std::path::{Path, PathBuf};
 
-use regolith_fsi::config::{FreeSurfaceStress, Integrator, KernelKind, Shifting, SolverConfig, TimeStep};
+use regolith_fsi::config::{FreeSurfaceStress, Integrator, KernelKind, Shifting, SolverConfig, TimeStep, WallContact};
 use regolith_fsi::rheology::MaterialParams;
 use regolith_terrain::{Aabb, Heightmap, SoilRegion, Surface};
 
@@ -123,6 +124,10 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         resolve_settings(file.simulation.as_ref(), file.sph.as_ref(), &e)?;
     let (spacing, bce_layers) = (solver.spacing, solver.bce_layers);
     let (materials, container, soil) = resolve_soil(path, source, dir, &file, spacing, &e)?;
+    let wall_contact = match file.container.as_ref().and_then(|c| c.soil_contact.as_ref()) {
+        None => WallContact::Rough,
+        Some(v) => contact::parse_contact(v).map_err(|m| e("container.soil_contact", m))?,
+    };
     let allow_unstable = file.simulation.as_ref().and_then(|s| s.allow_unstable_dt).unwrap_or(false);
     settings::check_fixed_step(&solver, &materials, allow_unstable, &e)?;
     let runaway_speed = file.simulation.as_ref().and_then(|s| s.runaway_speed).unwrap_or(DEFAULT_RUNAWAY_SPEED);
@@ -156,6 +161,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         solver,
         materials,
         container,
+        wall_contact,
         soil,
         bodies,
         rig,

@@ -83,6 +83,8 @@ pub struct BodySpec {
     /// Half-width (m) the body's active-domain box adds around its bounding box
     /// (`active_margin`); `None` takes `[sph.active]`'s.
     pub active_margin: Option<f64>,
+    /// How soil slides along the body (`soil_contact`; rough by default).
+    pub contact: WallContact,
 }
 
 /// How a plate is driven.
@@ -199,6 +201,8 @@ pub struct Scene {
     pub materials: Vec<SceneMaterial>,
     /// Fixed walls on the bottom and four sides (open top).
     pub container: Option<Aabb>,
+    /// How soil slides along the container walls (`[container] soil_contact`; rough by default).
+    pub wall_contact: WallContact,
     /// Soil regions.
     pub soil: Vec<SoilSpec>,
     /// Rigid bodies.

@@ -22,6 +22,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use regolith_fsi::config::WallContact;
 use regolith_rigid::{BodyDesc, Grousers, MassSpec, Motion, Pose, ShapeDesc};
 use regolith_vehicles::{JointType, PackagePath, UrdfModel, combine, wheel_shape};
 use serde::Deserialize;
@@ -284,6 +285,7 @@ pub(crate) fn resolve_vehicle(
             visual: combine(&link.visual),
             initial_velocity: None,
             active_margin: None,
+            contact: WallContact::Rough,
         });
     }
     for b in &bodies[first_body..] {

@@ -92,6 +92,11 @@ pub struct CpuSph<T: Real> {
     m_vel: Vec<Vec3<T>>,
     m_acc: Vec<Vec3<T>>,
     m_owner: Vec<u32>,
+    /// Coulomb μ of each marker owner (`INFINITY`: rough); empty while every owner is rough.
+    owner_mu: Vec<T>,
+    /// Wall normal of each marker (original order) for smooth and frictional contact; zero
+    /// where none was given (the marker stays rough).
+    m_normal: Vec<Vec3<T>>,
     m_force: Vec<Vec3<T>>,
     // Markers inside the grid, walls then bodies, each in cell order (index k ↔ original
     // ms_orig[k]).
@@ -265,6 +270,8 @@ impl<T: Real> CpuSph<T> {
             m_vel: vec![Vec3::zero(); nm],
             m_acc: vec![Vec3::zero(); nm],
             m_owner: markers.iter().map(|m| m.owner).collect(),
+            owner_mu: Vec::new(),
+            m_normal: Vec::new(),
             m_force: vec![Vec3::zero(); nm],
             ms_pos: Vec::new(),
             ms_vel: Vec::new(),
@@ -471,6 +478,50 @@ impl<T: Real> CpuSph<T> {
     /// Marker positions (m), original order.
     pub fn marker_positions(&self) -> &[Vec3<T>] {
         &self.m_pos
+    }
+    /// Sets how soil slides along the markers of each owner (`contact[0]` the fixed walls,
+    /// `contact[k + 1]` body k; owners past the end are rough), with the wall's unit normal into
+    /// the soil at each marker (original order; markers past the end of `normals`, or with a
+    /// zero normal, stay rough). A coefficient that is negative or not finite, or a normal
+    /// that is not zero or unit, is an error. All rough leaves the solver bit-identical to no
+    /// call.
+    pub fn set_wall_contact(
+        &mut self,
+        contact: &[crate::config::WallContact],
+        normals: &[[f64; 3]],
+    ) -> Result<(), SolverError> {
+        if normals.len() > self.m_owner.len() {
+            return Err(SolverError::Setup(format!(
+                "{} wall normals for {} markers",
+                normals.len(),
+                self.m_owner.len()
+            )));
+        }
+        if let Some((i, n)) = normals.iter().enumerate().find(|(_, n)| {
+            let l2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+            !(l2 == 0.0 || (l2 - 1.0).abs() < 1e-9)
+        }) {
+            return Err(SolverError::Setup(format!(
+                "marker {i}: wall normal {n:?} is neither zero nor of unit length"
+            )));
+        }
+        for (o, c) in contact.iter().enumerate() {
+            if let crate::config::WallContact::Friction(m) = c
+                && !(m.is_finite() && *m >= 0.0)
+            {
+                return Err(SolverError::Setup(format!("owner {o}: friction coefficient {m} must be finite and ≥ 0")));
+            }
+        }
+        let owners = self.m_owner.iter().map(|&o| o as usize + 1).max().unwrap_or(0).max(contact.len());
+        if contact.iter().all(|c| *c == crate::config::WallContact::Rough) {
+            self.owner_mu = Vec::new();
+            self.m_normal = Vec::new();
+        } else {
+            self.owner_mu = (0..owners).map(|o| T::of(contact.get(o).map_or(f64::INFINITY, |c| c.mu()))).collect();
+            self.m_normal =
+                (0..self.m_owner.len()).map(|i| normals.get(i).map_or(Vec3::zero(), |n| Vec3::of(*n))).collect();
+        }
+        Ok(())
     }
     /// Marker owners (0 = fixed walls, k + 1 = body k), original order.
     pub fn marker_owners(&self) -> &[u32] {
@@ -827,6 +878,12 @@ impl<T: Real> CpuSph<T> {
             &self.nl_ms,
             &self.packed[..m],
             sigma,
+            (!self.owner_mu.is_empty()).then_some(rates::ContactView {
+                orig: &self.ms_orig,
+                owner: &self.m_owner,
+                normal: &self.m_normal,
+                mu: &self.owner_mu,
+            }),
             &mut self.m_packed,
         );
         let visc = self.cfg.artificial_viscosity > 0.0;

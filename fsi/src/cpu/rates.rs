@@ -99,12 +99,75 @@ pub(crate) fn pack_soil<T: Real>(
     });
 }
 
+/// How the soil slides along the markers of each owner (see [`crate::config::WallContact`]):
+/// the Coulomb coefficient μ of each owner (0 = fixed walls, k + 1 = body k), `INFINITY` for
+/// rough (no slip), the owner and the wall's unit normal (into the soil; zero where there is
+/// none, which makes the marker rough) of each marker, original order, reached from a sorted
+/// marker through `orig`.
+#[derive(Clone, Copy)]
+pub(crate) struct ContactView<'a, T> {
+    /// Original index of each sorted marker.
+    pub orig: &'a [u32],
+    /// Owner of each marker, original order.
+    pub owner: &'a [u32],
+    /// Wall normal of each marker, original order.
+    pub normal: &'a [Vec3<T>],
+    /// μ per owner.
+    pub mu: &'a [T],
+}
+
+impl<T: Real> ContactView<'_, T> {
+    /// μ and the normal of sorted marker `m`; μ is `INFINITY` (rough) where the normal is zero.
+    #[inline(always)]
+    fn of(&self, m: usize) -> (T, Vec3<T>) {
+        let o = self.orig[m] as usize;
+        let n = self.normal[o];
+        if n.norm2() > T::zero() { (self.mu[self.owner[o] as usize], n) } else { (T::infinity(), n) }
+    }
+}
+
+/// Applies a wall contact of coefficient `mu` (finite) to an extrapolated marker, with `n` the
+/// wall's unit normal into the soil, `vb` the wall's velocity, `vbar` the soil's (kernel
+/// average) and `sigma` the extrapolated stress. Kinematics: free slip (the normal relative
+/// velocity is mirrored, so the wall stays impermeable; the tangential one is carried through,
+/// so the wall adds no shear rate). Traction `σ n`: its normal part is kept and its tangential
+/// part replaced by the friction traction `ŝ min(μ max(−t·n, 0), Z |u|)`, with `u` the soil's
+/// tangential velocity relative to the wall, `ŝ` its direction and `Z = ρ c` the soil's
+/// impedance: regularised Coulomb friction that slides at `μ` times the normal pressure and
+/// sticks to within a creep of `τ / (ρ c)` below it (`Z` is also the largest coefficient an
+/// explicit step at the CFL limit keeps stable). Smooth is `μ = 0`. Returns `(v, σ)`.
+#[inline(always)]
+fn apply_contact<T: Real>(
+    mu: T,
+    n: Vec3<T>,
+    impedance: T,
+    vb: Vec3<T>,
+    vbar: Vec3<T>,
+    sigma: Sym3<T>,
+) -> (Vec3<T>, Sym3<T>) {
+    let t = sigma.mul_vec(n);
+    let tn = t.dot(n);
+    let tt = t - n * tn;
+    let rel = vb - vbar;
+    let rel_n = n * rel.dot(n);
+    let v = vbar + rel_n * T::of(2.0);
+    let slip = rel_n - rel;
+    let s = slip.norm();
+    let friction = if s > T::zero() && mu > T::zero() {
+        slip * ((mu * (-tn).max(T::zero())).min(impedance * s) / s)
+    } else {
+        Vec3::zero()
+    };
+    (v, sigma - Sym3::sym_outer(tt, n) + Sym3::sym_outer(friction, n))
+}
+
 /// Boundary-marker extrapolation (Adami et al. 2012) for the markers `touched[k]` that have
 /// soil within reach (row `k` of `nl_ms`, result in `out[k]`). Each takes
 /// `v_w = 2 v_body − Σ v W / Σ W` (no slip), `σ_w = Σ σ W / Σ W − Δp I` with
 /// `Δp = (g − a_body) · Σ ρ (x_w − x_b) W / Σ W` (the hydrostatic step from the soil to the
 /// marker), and `ρ_w = Σ ρ W / Σ W`. A marker with no soil around it keeps the body's velocity
-/// and zero stress.
+/// and zero stress. Markers of an owner with a smooth or frictional contact then go through
+/// [`apply_contact`]; rough ones (and every marker without `contact`) are left as above.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>>(
     c: &PairConsts<T>,
@@ -118,11 +181,13 @@ pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>>(
     nl_ms: &NeighborList,
     soil: &[Packed<T>],
     soil_sigma: &[Sym3<T>],
+    contact: Option<ContactView<'_, T>>,
     out: &mut [Packed<T>],
 ) {
     out.par_iter_mut().enumerate().for_each(|(k, o)| {
         let m = touched[k] as usize;
         let xw = marker_pos[m];
+        let (mu, normal) = contact.map_or((T::infinity(), Vec3::zero()), |c| c.of(m));
         let (mut sw, mut sv, mut ss, mut srr, mut srho, mut scs) =
             (T::zero(), Vec3::zero(), Sym3::zero(), Vec3::zero(), T::zero(), T::zero());
         for &a in nl_ms.of(k) {
@@ -146,9 +211,14 @@ pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>>(
             let rho = srho * inv;
             let dp = (c.gravity - marker_acc[m]).dot(srr) * inv;
             let sigma = ss * inv - Sym3::iso(dp);
+            let (v, sigma) = if mu.is_finite() {
+                apply_contact(mu, normal, rho * scs * inv, marker_vel[m], sv * inv, sigma)
+            } else {
+                (marker_vel[m] * T::of(2.0) - sv * inv, sigma)
+            };
             Packed {
                 x: xw,
-                v: marker_vel[m] * T::of(2.0) - sv * inv,
+                v,
                 s: sigma * (T::one() / (rho * rho)),
                 vol: marker_volume,
                 mass: rho * marker_volume,

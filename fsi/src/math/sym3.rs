@@ -25,6 +25,19 @@ pub struct Sym3<T> {
 }
 
 impl<T: Real> Sym3<T> {
+    /// The symmetric product `a ⊗ b + b ⊗ a`.
+    #[inline(always)]
+    pub fn sym_outer(a: Vec3<T>, b: Vec3<T>) -> Self {
+        Self::new(
+            a.x * b.x + a.x * b.x,
+            a.y * b.y + a.y * b.y,
+            a.z * b.z + a.z * b.z,
+            a.x * b.y + b.x * a.y,
+            a.x * b.z + b.x * a.z,
+            a.y * b.z + b.y * a.z,
+        )
+    }
+
     /// Builds a tensor from its six components.
     #[inline(always)]
     pub fn new(xx: T, yy: T, zz: T, xy: T, xz: T, yz: T) -> Self {

@@ -1,0 +1,118 @@
+//! Soil contact of walls and bodies (`soil_contact`): a block sliding on a smooth floor keeps
+//! its momentum; on a Coulomb floor of coefficient μ it decelerates at μ g; a rough floor (the
+//! default) holds it. Smooth and frictional walls are CPU-only: wgpu refuses them in one line.
+
+use crate::common;
+
+use regolith::build::build_soil;
+
+/// An elastic block 0.1 × 0.1 × 0.05 m sliding along x at 1 m/s on the floor of a long box
+/// whose walls have `contact`. Returns (time, mean x velocity) after each step.
+fn slide(contact: &str, end: f64) -> Vec<(f64, f64)> {
+    let text = format!(
+        "[simulation]\nend_time = {end}\nprecision = \"f64\"\n\n[sph]\nspacing = 0.01\n\n\
+         [[materials]]\nname = \"block\"\nmodel = \"elastic\"\ndensity = 1600\nyoungs_modulus = 2e6\npoisson_ratio = 0.3\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.8, 0.2, 0.2]\nsoil_contact = {contact}\n\n\
+         [[soil_blocks]]\nmaterial = \"block\"\nshape = \"box\"\nmin = [0.05, 0.05, 0.0]\nmax = [0.15, 0.15, 0.05]\nvelocity = [1.0, 0.0, 0.0]\n"
+    );
+    let scene = common::scene(&text);
+    let mut m = build_soil::<f64>(&scene).expect("builds");
+    let mass: f64 = m.solver.masses().iter().sum();
+    let mut out = vec![(0.0, m.solver.momentum()[0] / mass)];
+    let mut t = 0.0;
+    while t < end {
+        t += m.solver.step(Some(end - t)).expect("step").dt;
+        out.push((t, m.solver.momentum()[0] / mass));
+    }
+    assert_eq!(m.solver.active(), m.solver.len(), "nothing leaves the box");
+    out
+}
+
+fn at(series: &[(f64, f64)], t: f64) -> f64 {
+    series.iter().min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs())).map_or(f64::NAN, |p| p.1)
+}
+
+#[test]
+fn a_block_keeps_its_momentum_on_a_smooth_floor_and_decelerates_at_mu_g_on_a_frictional_one() {
+    let smooth = slide("\"smooth\"", 0.15);
+    let mu = 0.3;
+    let friction = slide(&format!("{{ friction = {mu} }}"), 0.2);
+    let rough = slide("\"rough\"", 0.15);
+    for (name, s) in [("smooth", &smooth), ("friction", &friction), ("rough", &rough)] {
+        let samples: Vec<String> =
+            [0.0, 0.01, 0.02, 0.05, 0.1, 0.15].iter().map(|&t| format!("{:.3}", at(s, t))).collect();
+        eprintln!("{name}: v at 0, 0.01, 0.02, 0.05, 0.1, 0.15 s: {}", samples.join(", "));
+    }
+    let (v_s, v_f, v_r) = (at(&smooth, 0.15), at(&friction, 0.15), at(&rough, 0.15));
+    // Deceleration: the least-squares slope of v(t) over the whole slide, 0–0.2 s (Coulomb
+    // friction gives v0 − μ g t while the block slides; it stops at v0 / (μ g) = 0.34 s).
+    let pts: Vec<(f64, f64)> = friction.iter().copied().filter(|p| p.0 <= 0.2).collect();
+    let n = pts.len() as f64;
+    let (mt, mv) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
+    let stt: f64 = pts.iter().map(|p| (p.0 - mt).powi(2)).sum();
+    let stv: f64 = pts.iter().map(|p| (p.0 - mt) * (p.1 - mv)).sum();
+    let decel = -stv / stt;
+    let g = 9.81;
+    eprintln!(
+        "after 0.15 s: smooth {v_s:.4} m/s, μ = {mu} {v_f:.4} m/s (deceleration {decel:.3} m/s² vs μ g = {:.3}), rough {v_r:.4} m/s",
+        mu * g
+    );
+    // Smooth: only the normal approach is resisted, so the block keeps its speed (1 % allows
+    // the artificial viscosity of the first contact).
+    assert!((v_s - 1.0).abs() < 0.01, "smooth floor: {v_s} m/s after 0.15 s (from 1 m/s)");
+    // Coulomb: μ g within 5 % (the normal traction rings as the block settles onto the floor).
+    assert!((decel / (mu * g) - 1.0).abs() < 0.05, "deceleration {decel:.3} m/s² vs μ g = {:.3}", mu * g);
+    // And v(0.15 s) itself, against v0 − μ g t = 0.559 m/s.
+    assert!((v_f - (1.0 - mu * g * 0.15)).abs() < 0.05, "μ floor: {v_f} m/s at 0.15 s vs 0.559");
+    // Rough (no slip): the floor grips the block's base, which rings back and forth.
+    assert!(v_r < v_f, "rough {v_r} m/s should be slower than μ = {mu} {v_f} m/s");
+}
+
+#[test]
+fn a_rough_contact_is_bit_identical_to_none_and_wrong_contacts_are_one_line_errors() {
+    // `soil_contact = "rough"` written out changes nothing.
+    let a = slide("\"rough\"", 0.01);
+    let text = "[simulation]\nend_time = 0.01\nprecision = \"f64\"\n\n[sph]\nspacing = 0.01\n\n\
+         [[materials]]\nname = \"block\"\nmodel = \"elastic\"\ndensity = 1600\nyoungs_modulus = 2e6\npoisson_ratio = 0.3\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.8, 0.2, 0.2]\n\n\
+         [[soil_blocks]]\nmaterial = \"block\"\nshape = \"box\"\nmin = [0.05, 0.05, 0.0]\nmax = [0.15, 0.15, 0.05]\nvelocity = [1.0, 0.0, 0.0]\n";
+    let scene = common::scene(text);
+    let mut m = build_soil::<f64>(&scene).expect("builds");
+    let mass: f64 = m.solver.masses().iter().sum();
+    let mut t = 0.0;
+    let mut b = vec![(0.0, m.solver.momentum()[0] / mass)];
+    while t < 0.01 {
+        t += m.solver.step(Some(0.01 - t)).expect("step").dt;
+        b.push((t, m.solver.momentum()[0] / mass));
+    }
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.1.to_bits(), y.1.to_bits());
+    }
+    let err = |c: &str| {
+        let t = text.replace("max = [0.8, 0.2, 0.2]\n", &format!("max = [0.8, 0.2, 0.2]\nsoil_contact = {c}\n"));
+        let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("inline.toml");
+        regolith::scene::load_scene_source(&p, &t, &[]).expect_err("refused").to_string()
+    };
+    assert!(err("\"slippery\"").contains("key `container.soil_contact`: \"slippery\" is not a contact; allowed:"));
+    assert!(err("{ friction = -1.0 }").contains("friction must be finite and ≥ 0"));
+}
+
+#[test]
+fn smooth_walls_on_wgpu_and_non_rough_bodies_are_refused_in_one_line() {
+    let text = "[simulation]\nend_time = 0.01\nbackend = \"wgpu\"\nprecision = \"f32\"\n\n[sph]\nspacing = 0.02\nneighbor_skin = 0.0\n\n\
+         [[materials]]\nname = \"s\"\nmodel = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 2e6\npoisson_ratio = 0.3\nfriction_angle = 30.0\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.2, 0.2, 0.2]\nsoil_contact = \"smooth\"\n\n[terrain]\nmaterial = \"s\"\ndepth = 0.1\n";
+    let scene = common::scene(text);
+    let e = build_soil::<f32>(&scene).err().expect("wgpu has rough walls only").to_string();
+    assert!(
+        e.contains("key `soil_contact`: smooth and frictional walls run on the CPU backend only (this run is on wgpu)"),
+        "{e}"
+    );
+    assert!(!e.contains('\n'));
+    let body = text.replace("backend = \"wgpu\"\n", "").replace("soil_contact = \"smooth\"\n", "")
+        + "\n[[bodies]]\nname = \"plate\"\nshape = { type = \"box\", size = [0.05, 0.05, 0.02] }\nmass = 1.0\nposition = [0.1, 0.1, 0.15]\nsoil_contact = \"smooth\"\n";
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("inline.toml");
+    let e = regolith::scene::load_scene_source(&p, &body, &[]).expect_err("refused").to_string();
+    assert!(e.contains("key `bodies[0].soil_contact`: bodies have rough soil contact only so far"), "{e}");
+}
