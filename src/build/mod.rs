@@ -223,12 +223,12 @@ fn wall_normals(terrain: &TerrainBuild, d0: f64) -> Vec<[f64; 3]> {
         .iter()
         .map(|m| {
             let mut n = [0.0_f64; 3];
-            for a in 0..3 {
+            for (a, na) in n.iter_mut().enumerate() {
                 if m.pos[a] <= c.min[a] + 0.5 * d0 {
-                    n[a] += 1.0;
+                    *na += 1.0;
                 }
                 if m.pos[a] >= c.max[a] - 0.5 * d0 {
-                    n[a] -= 1.0;
+                    *na -= 1.0;
                 }
             }
             let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
