@@ -118,7 +118,7 @@ case!(
     unknown_section,
     "[sph]",
     "[fluid]\nx = 1\n[sph]",
-    "{}:5: key `fluid`: unknown field `fluid`, expected one of `simulation`, `sph`, `materials`, `container`, `terrain`, `soil_blocks`, `bodies`, `rig`, `output`, `vehicles`, `expect`, `study` (unknown keys are errors so that nothing is silently ignored)"
+    "{}:5: key `fluid`: unknown field `fluid`, expected one of `simulation`, `sph`, `materials`, `container`, `terrain`, `soil_blocks`, `bodies`, `rig`, `output`, `vehicles`, `expect`, `study`, `accuracy` (unknown keys are errors so that nothing is silently ignored)"
 );
 case!(
     output_every_below_exchange,
