@@ -244,3 +244,27 @@ fn sweep_flag_errors_are_one_line() {
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.contains("cannot start /nonexistent/python3") && err.contains("--runner threads"), "{err}");
 }
+
+#[test]
+fn calibrate_repose_flags_and_materials_are_checked_before_running() {
+    let o = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_repose_out").display().to_string();
+    let sand = "examples/materials/sand_dp.toml";
+    assert_one_line_error(
+        &["calibrate", "repose", "--material", sand, "--radius", "0.1", "--spacing", "0.05", "--out", &o],
+        "--spacing: 0.05 m leaves fewer than 4 spacings",
+    );
+    assert_one_line_error(
+        &["calibrate", "repose", "--material", sand, "--lift-speed", "0", "--out", &o],
+        "--lift-speed: must be a finite number > 0",
+    );
+    assert_one_line_error(&["calibrate", "repose", "--material", sand, "--cells", "2", "--out", &o], "--cells");
+    let bad = material(
+        "repose_bad.toml",
+        "model = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 1e6\npoisson_ratio = 0.7\nfriction_angle = 30\n",
+    );
+    assert_one_line_error(&["calibrate", "repose", "--material", &bad, "--out", &o], "poisson_ratio");
+    assert_one_line_error(
+        &["calibrate", "repose", "--material", "no/such/file.toml", "--out", &o],
+        "no/such/file.toml",
+    );
+}

@@ -40,6 +40,8 @@ mod material_errors;
 mod rapier_plugin;
 #[path = "recording.rs"]
 mod recording;
+#[path = "repose.rs"]
+mod repose;
 #[path = "scene_errors.rs"]
 mod scene_errors;
 #[path = "vehicles.rs"]

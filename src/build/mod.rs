@@ -180,6 +180,10 @@ pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, Terrai
         }
         e => e.into(),
     })?;
+    let mut terrain = terrain;
+    if !scene.container_walls {
+        terrain.markers.clear();
+    }
     Ok((mats, terrain))
 }
 
@@ -291,7 +295,9 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
         return Err(BuildError::NoSoilLeft);
     }
     let mut rigid = RigidWorld::new(scene.solver.gravity);
-    bodies::add_container(&mut rigid, &terrain, d0)?;
+    if scene.container_walls {
+        bodies::add_container(&mut rigid, &terrain, d0)?;
+    }
     let mut domain = terrain.domain;
     let mut ids = Vec::new();
     let mut fsi_bodies = Vec::new();

@@ -6,10 +6,15 @@
 //! - [`calibrate_mcc`]: the whole command: read, fit, write `mcc.json`, the plot and a ready
 //!   material file;
 //! - [`calibrate_envelope`]: c and φ from triaxial failure stresses (`envelope.json` with the
-//!   field names AGX users know, and the Mohr-circle plot).
+//!   field names AGX users know, and the Mohr-circle plot);
+//! - [`repose`]: the static angle of repose of the SPH soil (lifted hollow cylinder), and
+//!   the friction angle that gives a target angle;
+//! - [`target`]: the calibration loop (a safeguarded secant over one material parameter).
 
 pub mod fit;
 pub mod mcc;
+pub mod repose;
+pub mod target;
 
 use std::path::{Path, PathBuf};
 
@@ -70,6 +75,9 @@ pub enum CommandError {
     /// An output could not be written.
     #[error("{0}")]
     Output(String),
+    /// A simulation the command runs failed (names the scene or material).
+    #[error("{0}")]
+    Run(String),
 }
 
 /// Reads the data, fits, and writes `mcc.json`, `isotropic.png/svg` and (with a base material)

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use super::Failure;
+use crate::calibrate::repose::{ReposeInputs, ReposeSettings, calibrate_repose};
 use crate::calibrate::{CommandError, McCInputs, calibrate_envelope, calibrate_mcc};
 use crate::input::InputError;
 
@@ -10,7 +11,7 @@ fn failure(e: CommandError) -> Failure {
     match e {
         CommandError::Input(e) => Failure::Input(e),
         CommandError::Data { file, source } => Failure::Input(InputError::file(&file, source.to_string())),
-        CommandError::Output(m) => Failure::Run(anyhow::anyhow!(m)),
+        CommandError::Output(m) | CommandError::Run(m) => Failure::Run(anyhow::anyhow!(m)),
     }
 }
 
@@ -61,6 +62,56 @@ pub(super) fn mcc(
     match &r.material_file {
         Some(m) => println!("material: {m}"),
         None => println!("material.toml not written: give --base MATERIAL for density and elasticity"),
+    }
+    println!("outputs in {}", out.display());
+    Ok(())
+}
+
+pub(super) fn repose(
+    material: PathBuf,
+    settings: ReposeSettings,
+    target_angle: Option<f64>,
+    out: PathBuf,
+) -> Result<(), Failure> {
+    let r = calibrate_repose(&ReposeInputs { material, settings, out: out.clone(), target_angle }).map_err(failure)?;
+    let a = &r.analysis;
+    println!(
+        "static angle of repose: {:.2}° ± {:.2}° (min {:.2}°, max {:.2}°) over {} of {} slices",
+        a.mean_deg,
+        a.std_deg,
+        a.min_deg,
+        a.max_deg,
+        r.IndividualAnglesOfRepose.len(),
+        a.slices.len()
+    );
+    let u = &r.run;
+    println!(
+        "  {} particles: {} on the base, {} sunk, {} falling off, {} through the base, {} lifted; pile {} (rms speed {:.2e} m/s, largest {:.2e} m/s); {:.2} s simulated in {:.1} s",
+        u.particles,
+        u.on_base,
+        u.sunk,
+        u.falling,
+        u.through_base,
+        u.lifted,
+        if u.settled { "at rest" } else { "still moving at the end" },
+        u.final_rms_speed,
+        u.final_max_speed,
+        u.end_time,
+        u.wall_time_s
+    );
+    if let Some(c) = &r.calibration {
+        match (c.converged, &r.calibrated_material) {
+            (Some(phi), Some(m)) => {
+                println!("calibrated: friction_angle = {phi:.3}° after {} tests; material: {m}", c.iterates.len())
+            }
+            _ => {
+                return Err(Failure::Run(anyhow::anyhow!(
+                    "calibration did not converge: {} (tests in {}, repose.json lists them)",
+                    c.failure.as_deref().unwrap_or("unknown"),
+                    out.display()
+                )));
+            }
+        }
     }
     println!("outputs in {}", out.display());
     Ok(())

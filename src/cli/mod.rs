@@ -14,6 +14,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
+use crate::calibrate::repose::ReposeSettings;
 use crate::input::InputError;
 
 /// Why a command failed.
@@ -206,6 +207,50 @@ pub enum CalibrateCommand {
         base: Option<PathBuf>,
         /// Output folder.
         #[arg(long, value_name = "DIR", default_value = "out/calibrate-mcc")]
+        out: PathBuf,
+    },
+    /// The static angle of repose of the SPH soil: a column on a base disc inside a hollow
+    /// cylinder that is lifted; what falls off the base sinks; the pile is analysed in slices ×
+    /// cells (AGX's method). Writes repose.json, particles.csv, series.csv, scene.toml and the
+    /// profile and top_view plots.
+    Repose {
+        /// Material file (TOML).
+        #[arg(long, value_name = "FILE")]
+        material: PathBuf,
+        /// Radius of the base disc and of the cylinder (m).
+        #[arg(long, value_name = "M", default_value_t = 0.1)]
+        radius: f64,
+        /// Height of the soil column (m) [default: 2 × radius].
+        #[arg(long, value_name = "M")]
+        height: Option<f64>,
+        /// Particle spacing d0 (m) [default: radius / 15].
+        #[arg(long, value_name = "M")]
+        spacing: Option<f64>,
+        /// Lifting speed of the cylinder (m/s).
+        #[arg(long, value_name = "M/S", default_value_t = 0.1)]
+        lift_speed: f64,
+        /// Longest relaxation after the cylinder has cleared the pile (s); it ends sooner once
+        /// the pile is at rest (rms speed below 10⁻³ √(g R)).
+        #[arg(long, value_name = "S", default_value_t = 1.0)]
+        relax_time: f64,
+        /// Slices of the analysis.
+        #[arg(long, value_name = "N", default_value_t = 20)]
+        slices: usize,
+        /// Cells per slice.
+        #[arg(long, value_name = "N", default_value_t = 15)]
+        cells: usize,
+        /// Cell radius (m) [default: the spacing].
+        #[arg(long, value_name = "M")]
+        cell_radius: Option<f64>,
+        /// Floating-point precision of the run.
+        #[arg(long, value_enum, default_value = "f32")]
+        precision: Precision,
+        /// Adjust the material's friction angle until the pile stands at this angle (degrees);
+        /// writes material.toml when the loop converges.
+        #[arg(long, value_name = "DEG")]
+        target_angle: Option<f64>,
+        /// Output folder.
+        #[arg(long, value_name = "DIR", default_value = "out/calibrate-repose")]
         out: PathBuf,
     },
 }
@@ -519,6 +564,44 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Calibrate { calibrate: CalibrateCommand::Envelope { tests, out } } => calibrate::envelope(tests, out),
         Command::Calibrate { calibrate: CalibrateCommand::Mcc { isotropic, critical, base, out } } => {
             calibrate::mcc(isotropic, critical, base, out)
+        }
+        Command::Calibrate {
+            calibrate:
+                CalibrateCommand::Repose {
+                    material,
+                    radius,
+                    height,
+                    spacing,
+                    lift_speed,
+                    relax_time,
+                    slices,
+                    cells,
+                    cell_radius,
+                    precision,
+                    target_angle,
+                    out,
+                },
+        } => {
+            let mut s = ReposeSettings::for_radius(radius);
+            if let Some(h) = height {
+                s.height = h;
+            }
+            if let Some(d) = spacing {
+                s.spacing = d;
+                s.cell_radius = d;
+            }
+            if let Some(c) = cell_radius {
+                s.cell_radius = c;
+            }
+            s.lift_speed = lift_speed;
+            s.relax_time = relax_time;
+            s.slices = slices;
+            s.cells = cells;
+            s.precision = match precision {
+                Precision::F32 => crate::scene::Precision::F32,
+                Precision::F64 => crate::scene::Precision::F64,
+            };
+            calibrate::repose(material, s, target_angle, out)
         }
         Command::Study { study: StudyCommand::Stability { cases, size, cases_dir, out } } => {
             let size = match size {

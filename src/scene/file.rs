@@ -145,6 +145,7 @@ pub(crate) struct ContainerFile {
     pub min: Option<[f64; 3]>,
     pub max: Option<[f64; 3]>,
     pub soil_contact: Option<toml::Value>,
+    pub walls: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -128,6 +128,13 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         None => WallContact::Rough,
         Some(v) => contact::parse_contact(v).map_err(|m| e("container.soil_contact", m))?,
     };
+    let container_walls = file.container.as_ref().and_then(|c| c.walls).unwrap_or(true);
+    if !container_walls && wall_contact != WallContact::Rough {
+        return Err(e(
+            "container.soil_contact",
+            "is set but container.walls = false (there is no wall to slide on); remove one of them".into(),
+        ));
+    }
     let allow_unstable = file.simulation.as_ref().and_then(|s| s.allow_unstable_dt).unwrap_or(false);
     settings::check_fixed_step(&solver, &materials, allow_unstable, &e)?;
     let runaway_speed = file.simulation.as_ref().and_then(|s| s.runaway_speed).unwrap_or(DEFAULT_RUNAWAY_SPEED);
@@ -161,6 +168,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         solver,
         materials,
         container,
+        container_walls,
         wall_contact,
         soil,
         bodies,

@@ -199,8 +199,13 @@ pub struct Scene {
     pub solver: SolverConfig,
     /// Materials, by index.
     pub materials: Vec<SceneMaterial>,
-    /// Fixed walls on the bottom and four sides (open top).
+    /// Fixed walls on the bottom and four sides (open top); with `container_walls` false only
+    /// the region the soil may occupy.
     pub container: Option<Aabb>,
+    /// Whether the container has walls (`[container] walls`, default true). Without them soil
+    /// that leaves the container's domain (a few spacings beyond it) escapes: a sink. Bodies
+    /// then carry the soil.
+    pub container_walls: bool,
     /// How soil slides along the container walls (`[container] soil_contact`; rough by default).
     pub wall_contact: WallContact,
     /// Soil regions.
