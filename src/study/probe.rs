@@ -30,11 +30,25 @@ struct RunFigures {
     track: Vec<(f64, Vec<[f64; 3]>)>,
 }
 
+/// Where and when the soil was fastest: what a failed speed bound needs to be traced.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Fastest {
+    /// Its speed (m/s).
+    pub speed: f64,
+    /// Simulated time at the end of the exchange it was measured after (s).
+    pub time: f64,
+    /// The particle's original index.
+    pub particle: u32,
+    /// Its position then (m).
+    pub position: [f64; 3],
+}
+
 /// Measures a scene's runs for [`crate::study::stability`].
 #[derive(Clone, Debug, Default)]
 pub struct Probe {
     runs: Vec<RunFigures>,
     max_speed: f64,
+    fastest: Option<Fastest>,
     /// Body names, in scene order.
     names: Vec<String>,
     /// Per body: shape, its initial velocity, mass (for the impact law).
@@ -46,6 +60,8 @@ pub struct Probe {
 pub struct Figures {
     /// Largest particle speed of any run (m/s).
     pub max_soil_speed: f64,
+    /// Which particle had it, when and where.
+    pub fastest: Option<Fastest>,
     /// Largest particle speed at the end of the last run (m/s).
     pub final_soil_speed: f64,
     /// Largest count of particles deep inside a body, any run.
@@ -89,6 +105,7 @@ impl Probe {
         let ke_growth = self.runs.iter().map(ke_growth).fold(0.0, f64::max);
         Some(Figures {
             max_soil_speed: self.max_speed,
+            fastest: self.fastest,
             final_soil_speed: last.final_speed,
             inside_bodies: self.runs.iter().map(|r| r.inside_max).max().unwrap_or(0),
             ke_growth,
@@ -178,6 +195,25 @@ impl<T: Real> Observer<T> for Probe {
     }
 
     fn after_step(&mut self, sim: &Simulation<T>, stats: &RunStats) -> Result<(), RunError> {
+        if stats.last_speed > self.max_speed {
+            // A new maximum (rare after the first exchanges): find its particle.
+            let f = &sim.system.fluid;
+            let n = f.active();
+            let best = f.velocities()[..n]
+                .iter()
+                .map(|v| v.as_f64())
+                .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((k, speed)) = best {
+                self.fastest = Some(Fastest {
+                    speed,
+                    time: sim.time(),
+                    particle: f.ids()[k],
+                    position: f.positions()[k].as_f64(),
+                });
+            }
+        }
         self.max_speed = self.max_speed.max(stats.last_speed);
         let Some(run) = self.runs.last_mut() else {
             return Ok(());

@@ -79,6 +79,8 @@ pub struct CaseResult {
     /// The defect the case is known to expose (`[study] known_failure`): it is expected to
     /// miss, and `pass` is then true only while it still does.
     pub known_failure: Option<String>,
+    /// The fastest soil particle of the run: speed, when, which and where.
+    pub fastest: Option<super::probe::Fastest>,
 }
 
 /// The case files of a folder, by stem, sorted.
@@ -176,6 +178,7 @@ fn run_case(
         wall_s: 0.0,
         ended: None,
         known_failure: None,
+        fastest: None,
     };
     let refused = expect.iter().find(|x| x.metric == Metric::Refused);
     let scene = match (load_scene(path, sets), refused) {
@@ -226,6 +229,7 @@ fn run_case(
         });
     }
     let figures = probe.figures();
+    result.fastest = figures.as_ref().and_then(|f| f.fastest);
     if let Some(m) = probe.mass_error() {
         result.checks.push(CheckResult {
             check: "mass".into(),
@@ -374,6 +378,18 @@ pub fn write_tables(results: &[CaseResult], out: &Path) -> Result<Vec<PathBuf>, 
             csv.push_str(&format!(
                 "{},{},{},{},\"{}\",{},{},{},{},{:.3}\n",
                 r.case, c.check, c.measured, c.unit, c.bound, verdict, r.particles, r.steps, r.sim_time, r.wall_s
+            ));
+        }
+        if let Some(f) = &r.fastest {
+            md.push_str(&format!(
+                "| {} | fastest particle | {} m/s: particle {} at t = {:.4} s, x = [{:.4}, {:.4}, {:.4}] m | | | | | | |\n",
+                r.case,
+                fmt_value(f.speed),
+                f.particle,
+                f.time,
+                f.position[0],
+                f.position[1],
+                f.position[2]
             ));
         }
         if let Some(e) = &r.ended {
