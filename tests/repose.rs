@@ -95,6 +95,7 @@ fn the_pile_angle_grows_with_the_friction_angle_and_soil_leaves_only_into_the_si
             settings: s.clone(),
             out: out.clone(),
             target_angle: None,
+            tolerance: regolith::calibrate::repose::ANGLE_TOLERANCE,
         })
         .unwrap_or_else(|e| panic!("φ = {phi}: {e}"));
         let u = &r.run;

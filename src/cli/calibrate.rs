@@ -71,9 +71,11 @@ pub(super) fn repose(
     material: PathBuf,
     settings: ReposeSettings,
     target_angle: Option<f64>,
+    tolerance: f64,
     out: PathBuf,
 ) -> Result<(), Failure> {
-    let r = calibrate_repose(&ReposeInputs { material, settings, out: out.clone(), target_angle }).map_err(failure)?;
+    let r = calibrate_repose(&ReposeInputs { material, settings, out: out.clone(), target_angle, tolerance })
+        .map_err(failure)?;
     let a = &r.analysis;
     println!(
         "static angle of repose: {:.2}° ± {:.2}° (min {:.2}°, max {:.2}°) over {} of {} slices",

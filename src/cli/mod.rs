@@ -14,7 +14,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
-use crate::calibrate::repose::ReposeSettings;
+use crate::calibrate::repose::{ANGLE_TOLERANCE, ReposeSettings};
 use crate::input::InputError;
 
 /// Why a command failed.
@@ -231,7 +231,7 @@ pub enum CalibrateCommand {
         lift_speed: f64,
         /// Longest relaxation after the cylinder has cleared the pile (s); it ends sooner once
         /// the pile is at rest (rms speed below 10⁻³ √(g R)).
-        #[arg(long, value_name = "S", default_value_t = 1.0)]
+        #[arg(long, value_name = "S", default_value_t = 3.0)]
         relax_time: f64,
         /// Slices of the analysis.
         #[arg(long, value_name = "N", default_value_t = 20)]
@@ -249,6 +249,10 @@ pub enum CalibrateCommand {
         /// writes material.toml when the loop converges.
         #[arg(long, value_name = "DEG")]
         target_angle: Option<f64>,
+        /// The loop accepts a pile within this many degrees of the target, or within the
+        /// slices' standard error if that is larger.
+        #[arg(long, value_name = "DEG", default_value_t = ANGLE_TOLERANCE)]
+        tolerance: f64,
         /// Output folder.
         #[arg(long, value_name = "DIR", default_value = "out/calibrate-repose")]
         out: PathBuf,
@@ -579,6 +583,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                     cell_radius,
                     precision,
                     target_angle,
+                    tolerance,
                     out,
                 },
         } => {
@@ -601,7 +606,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 Precision::F32 => crate::scene::Precision::F32,
                 Precision::F64 => crate::scene::Precision::F64,
             };
-            calibrate::repose(material, s, target_angle, out)
+            calibrate::repose(material, s, target_angle, tolerance, out)
         }
         Command::Study { study: StudyCommand::Stability { cases, size, cases_dir, out } } => {
             let size = match size {
