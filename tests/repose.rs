@@ -51,6 +51,9 @@ fn an_open_container_lets_soil_fall_out_of_the_domain() {
     let (n, active) = run_block("walls = false");
     assert!(n > 0);
     assert_eq!(active, 0, "without walls every particle has left the domain");
+    // `regolith check` says so, and counts no wall markers.
+    let plan = regolith::scene::describe(&common::scene(&BLOCK.replace("WALLS", "walls = false")));
+    assert!(plan.contains("open (walls = false)") && plan.contains("+ 0 wall markers"), "{plan}");
 }
 
 #[test]

@@ -138,7 +138,15 @@ pub fn describe(scene: &Scene) -> String {
         );
     }
     let mut walls = 0.0;
-    if let Some(c) = scene.container {
+    if let Some(c) = scene.container
+        && !scene.container_walls
+    {
+        let _ = writeln!(
+            s,
+            "  container [{:?} .. {:?}]: open (walls = false): no walls; soil leaving the domain escapes",
+            c.min, c.max
+        );
+    } else if let Some(c) = scene.container {
         let sz = c.size();
         let area = sz[0] * sz[1] + 2.0 * sz[2] * (sz[0] + sz[1]);
         walls = area / sv.spacing.powi(2) * sv.bce_layers as f64;
