@@ -302,7 +302,7 @@ pub fn tube_obj(inner: f64, outer: f64, height: f64, n: usize) -> String {
 
 /// The scene of the test: the material (a table read from the material file, renamed "soil"),
 /// the column, the base disc, the cylinder (`tube.obj` beside the scene) and an open container.
-pub fn scene_text(material: &toml::Table, s: &ReposeSettings) -> String {
+pub fn scene_text(material: &toml::Table, s: &ReposeSettings) -> Result<String, CommandError> {
     let d0 = s.spacing;
     // Whole spacings, so that the lattice puts a layer of soil one spacing above the base.
     let snap = |x: f64| (x / d0).ceil() * d0;
@@ -311,9 +311,11 @@ pub fn scene_text(material: &toml::Table, s: &ReposeSettings) -> String {
     mat.insert("name".into(), toml::Value::String("soil".into()));
     let mut materials = toml::Table::new();
     materials.insert("materials".into(), toml::Value::Array(vec![toml::Value::Table(mat)]));
+    let materials = toml::to_string(&materials)
+        .map_err(|e| CommandError::Output(format!("cannot write the test's material section: {e}")))?;
     let base_thickness = 2.0 * d0;
     let tube_height = s.height + 2.0 * d0;
-    format!(
+    Ok(format!(
         "# regolith calibrate repose: the lifted hollow-cylinder test (written by the command;\n\
          # `regolith run` runs it as it ran, except the cylinder's smooth contact, which the\n\
          # command sets).\n\
@@ -350,7 +352,7 @@ pub fn scene_text(material: &toml::Table, s: &ReposeSettings) -> String {
         end = s.lift_time() + s.relax_time,
         prec = s.precision.name(),
         d0 = d0,
-        materials = toml::to_string(&materials).unwrap_or_default(),
+        materials = materials,
         m = -half,
         half = half,
         zmin = -snap(base_thickness + 2.0 * d0),
@@ -361,7 +363,7 @@ pub fn scene_text(material: &toml::Table, s: &ReposeSettings) -> String {
         bt = base_thickness,
         bz = -0.5 * base_thickness,
         v = s.lift_speed,
-    ) + &format!("# cylinder: inner radius {} m, wall {} m, height {} m\n", s.radius, 2.0 * d0, tube_height)
+    ) + &format!("# cylinder: inner radius {} m, wall {} m, height {} m\n", s.radius, 2.0 * d0, tube_height))
 }
 
 /// Where the soil ended.
@@ -420,7 +422,7 @@ pub fn run_test(material: &toml::Table, s: &ReposeSettings, dir: &Path) -> Resul
         Ok::<PathBuf, CommandError>(p)
     };
     write("tube.obj", &tube_obj(s.radius, s.radius + 2.0 * s.spacing, s.height + 2.0 * s.spacing, TUBE_SEGMENTS))?;
-    let scene_path = write("scene.toml", &scene_text(material, s))?;
+    let scene_path = write("scene.toml", &scene_text(material, s)?)?;
     let scene = load_scene(&scene_path, &[])?;
     match s.precision {
         Precision::F32 => run_scene::<f32>(&scene, s),
@@ -663,7 +665,9 @@ pub fn calibrate_repose(inp: &ReposeInputs) -> Result<ReposeReport, CommandError
         last = Some((m, run, dir));
         Ok::<_, CommandError>(out)
     })?;
-    let (m, run, dir) = last.expect("the loop evaluates at least once");
+    let Some((m, run, dir)) = last else {
+        return Err(CommandError::Run(format!("{}: the calibration loop ran no test", inp.material.display())));
+    };
     let written = match loop_run.converged {
         Some(phi) => Some(write_calibrated(&inp.material, phi, target, &inp.out.join("material.toml"))?),
         None => None,
