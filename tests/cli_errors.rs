@@ -268,3 +268,42 @@ fn calibrate_repose_flags_and_materials_are_checked_before_running() {
         "no/such/file.toml",
     );
 }
+
+#[test]
+fn calibrate_triaxial_flags_and_materials_are_checked_before_running() {
+    let o = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_triaxial_out").display().to_string();
+    let sand = "examples/materials/sand_dp.toml";
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--width", "0.1", "--spacing", "0.05", "--out", &o],
+        "--spacing: 0.05 m leaves fewer than 4 spacings",
+    );
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--confining", "5e3,-1", "--out", &o],
+        "--confining: must be one or more stresses > 0 Pa",
+    );
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--max-strain", "0.7", "--out", &o],
+        "--max-strain: must lie in (0, 0.3]",
+    );
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--filter-order", "0", "--out", &o],
+        "--filter-order",
+    );
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--target-phi", "95", "--out", &o],
+        "--target-phi",
+    );
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--target-phi", "30", "--confining", "5e3,1e4", "--out", &o],
+        "--confining: --target-phi needs at least three confining stresses",
+    );
+    let bad = material(
+        "triaxial_bad.toml",
+        "model = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = -1e6\npoisson_ratio = 0.3\nfriction_angle = 30\n",
+    );
+    assert_one_line_error(&["calibrate", "triaxial", "--material", &bad, "--out", &o], "youngs_modulus");
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", "no/such/file.toml", "--out", &o],
+        "no/such/file.toml",
+    );
+}

@@ -44,6 +44,8 @@ mod recording;
 mod repose;
 #[path = "scene_errors.rs"]
 mod scene_errors;
+#[path = "triaxial.rs"]
+mod triaxial;
 #[path = "vehicles.rs"]
 mod vehicles;
 #[path = "verlet.rs"]

@@ -50,7 +50,9 @@ pub const MAX_NEIGHBOR_SKIN: f64 = 1.0;
 
 /// Below this value of the free-surface indicator λ a particle has almost no neighbours on
 /// some side (λ ≤ 0.3 at the edges and corners of a resting block, 0 for an isolated particle):
-/// it is detached from the soil and carries no stress, whatever the free-surface mode.
+/// it is detached from the soil and carries no stress, whatever the free-surface mode. Wall
+/// and body markers count as neighbours: a particle against a wall has a full support, while
+/// a parcel squeezed into a gap between two walls with little soil around it is detached.
 pub const DETACHED_THRESHOLD: f64 = 0.2;
 
 /// Lower bound of a soil particle's density, as a fraction of its material's bulk density ρ0.

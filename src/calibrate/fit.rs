@@ -1,5 +1,6 @@
 //! Least-squares fits with their standard errors: a straight line, a line through the origin,
-//! a common slope over several groups, and the Mohr–Coulomb envelope of Mohr circles.
+//! a common slope over several groups, and the Mohr–Coulomb envelope of Mohr circles (with
+//! cohesion, or through the origin).
 //!
 //! Standard errors are the usual ones of ordinary least squares, from the residual variance
 //! with the degrees of freedom left after the fit; with no degree of freedom left (two points
@@ -199,6 +200,25 @@ pub fn mohr_coulomb(sigma3: &[f64], sigma1: &[f64]) -> Result<MohrCoulomb, FitEr
     Ok(MohrCoulomb { c, phi: sin.asin().to_degrees(), se_c, se_phi, circles: s.len() })
 }
 
+/// The cohesionless envelope `τ = σ tan φ` (c = 0) tangent to Mohr circles given by σ3 and σ1
+/// (compression positive): the least-squares slope of the radii on the centres through the
+/// origin is sin φ. The critical state of a Cam Clay soil (q = M p) is such an envelope.
+/// Returns φ and its standard error (degrees; `None` with one circle).
+pub fn mohr_coulomb_cohesionless(sigma3: &[f64], sigma1: &[f64]) -> Result<(f64, Option<f64>), FitError> {
+    same_length(sigma3, sigma1)?;
+    let s: Vec<f64> = sigma3.iter().zip(sigma1).map(|(a, b)| 0.5 * (a + b)).collect();
+    let t: Vec<f64> = sigma3.iter().zip(sigma1).map(|(a, b)| 0.5 * (b - a)).collect();
+    let p = proportional(&s, &t)?;
+    if !(p.slope > 0.0 && p.slope < 1.0) {
+        return Err(FitError::NotMohrCoulomb(format!(
+            "the circles' radii grow with slope {:.4} against their centres; a frictional envelope needs a slope in (0, 1)",
+            p.slope
+        )));
+    }
+    let cos = (1.0 - p.slope * p.slope).sqrt();
+    Ok((p.slope.asin().to_degrees(), p.se_slope.map(|se| (se / cos).to_degrees())))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -274,6 +294,14 @@ mod tests {
         let (sd_c, sd_phi) = (sd(&cs), sd(&phis));
         assert!((se_c / sd_c - 1.0).abs() < 0.2, "se(c) {se_c} against a spread of {sd_c}");
         assert!((se_phi / sd_phi - 1.0).abs() < 0.2, "se(φ) {se_phi} against a spread of {sd_phi}");
+    }
+
+    #[test]
+    fn the_cohesionless_envelope_recovers_a_critical_state_angle() {
+        let (s3, s1) = circles(0.0, 30.0, &[10e3, 20e3, 35e3]);
+        let (phi, se) = mohr_coulomb_cohesionless(&s3, &s1).expect("fit");
+        assert!((phi - 30.0).abs() < 1e-10 && se.expect("se") < 1e-10);
+        assert!(mohr_coulomb_cohesionless(&[1.0], &[1.0]).is_err(), "equal stresses: no friction");
     }
 
     #[test]

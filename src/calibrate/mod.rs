@@ -9,12 +9,17 @@
 //!   field names AGX users know, and the Mohr-circle plot);
 //! - [`repose`]: the static angle of repose of the SPH soil (lifted hollow cylinder), and
 //!   the friction angle that gives a target angle;
+//! - [`triaxial`]: the virtual triaxial test of the SPH soil (six servo-controlled plates),
+//!   c and φ with standard errors, and the friction angle that gives a target φ;
+//! - [`lowpass`]: the zero-phase Butterworth filter and the failure pick of a triaxial test;
 //! - [`target`]: the calibration loop (a safeguarded secant over one material parameter).
 
 pub mod fit;
+pub mod lowpass;
 pub mod mcc;
 pub mod repose;
 pub mod target;
+pub mod triaxial;
 
 use std::path::{Path, PathBuf};
 
@@ -78,6 +83,11 @@ pub enum CommandError {
     /// A simulation the command runs failed (names the scene or material).
     #[error("{0}")]
     Run(String),
+}
+
+/// A flag's value must be a finite number > 0; the error names the flag.
+pub(crate) fn positive(flag: &'static str, v: f64) -> Result<(), (&'static str, String)> {
+    if v.is_finite() && v > 0.0 { Ok(()) } else { Err((flag, format!("must be a finite number > 0 (got {v})"))) }
 }
 
 /// Reads the data, fits, and writes `mcc.json`, `isotropic.png/svg` and (with a base material)

@@ -27,7 +27,7 @@ use serde::Serialize;
 
 use super::CommandError;
 use super::fit::{FitError, line};
-use super::target::{TargetRun, TargetSettings, calibrate_to_target};
+use super::target::{TargetRun, TargetSettings, calibrate_to_target, write_calibrated};
 use crate::input::{InputError, read_text};
 use crate::material::load_material_file;
 use crate::output::plot::{Figure, Panel, Series};
@@ -91,13 +91,7 @@ impl ReposeSettings {
 
     /// Checks the settings; the error names the flag and what is allowed.
     pub fn check(&self) -> Result<(), (&'static str, String)> {
-        let positive = |flag: &'static str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err((flag, format!("must be a finite number > 0 (got {v})")))
-            }
-        };
+        use super::positive;
         positive("--radius", self.radius)?;
         positive("--height", self.height)?;
         positive("--spacing", self.spacing)?;
@@ -669,7 +663,14 @@ pub fn calibrate_repose(inp: &ReposeInputs) -> Result<ReposeReport, CommandError
         return Err(CommandError::Run(format!("{}: the calibration loop ran no test", inp.material.display())));
     };
     let written = match loop_run.converged {
-        Some(phi) => Some(write_calibrated(&inp.material, phi, target, &inp.out.join("material.toml"))?),
+        Some(phi) => Some(write_calibrated(
+            &inp.material,
+            phi,
+            &format!(
+                "`regolith calibrate repose --target-angle {target}`: friction_angle set so that the SPH pile stands\n# at the target angle (see repose.json)"
+            ),
+            &inp.out.join("material.toml"),
+        )?),
         None => None,
     };
     report(inp, &dir, &m, run, Some(loop_run), written)
@@ -677,20 +678,6 @@ pub fn calibrate_repose(inp: &ReposeInputs) -> Result<ReposeReport, CommandError
 
 fn friction_angle(m: &toml::Table) -> Option<f64> {
     m.get("friction_angle").and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-}
-
-/// The material file with the calibrated friction angle, checked by loading it back.
-fn write_calibrated(base: &Path, phi: f64, target: f64, out: &Path) -> Result<String, CommandError> {
-    let mut t = material_table(base)?;
-    t.insert("friction_angle".into(), phi.into());
-    let body = toml::to_string(&t).map_err(|e| CommandError::Output(e.to_string()))?;
-    let text = format!(
-        "# Written by `regolith calibrate repose --target-angle {target}` from {}: friction_angle set so that\n# the SPH pile stands at the target angle (see repose.json); other keys as there.\n{body}",
-        base.display()
-    );
-    std::fs::write(out, text).map_err(|e| CommandError::Output(format!("cannot write {}: {e}", out.display())))?;
-    load_material_file(out)?;
-    Ok(out.display().to_string())
 }
 
 fn report(

@@ -8,7 +8,13 @@
 //! a floor) of the target, and says so; out of the parameter's allowed range or out of
 //! iterations it stops with what it measured, never with a silently clamped value.
 
+use std::path::Path;
+
 use serde::Serialize;
+
+use super::CommandError;
+use super::repose::material_table;
+use crate::material::load_material_file;
 
 /// One evaluation of the loop.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -148,6 +154,19 @@ pub fn calibrate_to_target<E>(
         }
         x = next;
     }
+}
+
+/// Writes `base` with its friction angle set to `phi` to `out`, under a header saying which
+/// command wrote it and why (`why`, one line), and checks it by loading it back. Returns the
+/// path written.
+pub fn write_calibrated(base: &Path, phi: f64, why: &str, out: &Path) -> Result<String, CommandError> {
+    let mut t = material_table(base)?;
+    t.insert("friction_angle".into(), phi.into());
+    let body = toml::to_string(&t).map_err(|e| CommandError::Output(e.to_string()))?;
+    let text = format!("# Written by {why} from {}; other keys as there.\n{body}", base.display());
+    std::fs::write(out, text).map_err(|e| CommandError::Output(format!("cannot write {}: {e}", out.display())))?;
+    load_material_file(out)?;
+    Ok(out.display().to_string())
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use super::Failure;
 use crate::calibrate::repose::{ReposeInputs, ReposeSettings, calibrate_repose};
+use crate::calibrate::triaxial::{TriaxialInputs, TriaxialSettings, calibrate_triaxial};
 use crate::calibrate::{CommandError, McCInputs, calibrate_envelope, calibrate_mcc};
 use crate::input::InputError;
 
@@ -109,6 +110,65 @@ pub(super) fn repose(
             _ => {
                 return Err(Failure::Run(anyhow::anyhow!(
                     "calibration did not converge: {} (tests in {}, repose.json lists them)",
+                    c.failure.as_deref().unwrap_or("unknown"),
+                    out.display()
+                )));
+            }
+        }
+    }
+    println!("outputs in {}", out.display());
+    Ok(())
+}
+
+pub(super) fn triaxial(
+    material: PathBuf,
+    settings: TriaxialSettings,
+    target_phi: Option<f64>,
+    tolerance_phi: f64,
+    out: PathBuf,
+) -> Result<(), Failure> {
+    let r = calibrate_triaxial(&TriaxialInputs { material, settings, out: out.clone(), target_phi, tolerance_phi })
+        .map_err(failure)?;
+    println!(
+        "triaxial envelope of {} tests: c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°{}",
+        r.tests.len(),
+        r.c,
+        se(r.standard_error_c),
+        r.phi,
+        se(r.standard_error_phi),
+        match (r.material_phi, r.material_c) {
+            (Some(p), c) => format!(" (material: φ = {p}°, c = {} Pa)", c.unwrap_or(0.0)),
+            _ => String::new(),
+        }
+    );
+    println!(
+        "  through the origin (c = 0, a critical state): φ = {:.3}° ± {}°",
+        r.phi_cohesionless,
+        se(r.standard_error_phi_cohesionless)
+    );
+    for t in &r.tests {
+        println!(
+            "  σ0 = {:.4e} Pa: {} particles, consolidated in {:.3} s, failure ({:?}) at axial strain {:.4}: σ1 = {:.4e} Pa, σ3 = {:.4e} Pa; inertial number {:.1e}; {} escaped; {:.1} s",
+            t.confining,
+            t.particles,
+            t.consolidation_time,
+            t.failure.kind,
+            t.strain_at_failure,
+            t.vertical_at_failure,
+            t.lateral_at_failure,
+            t.inertial_number,
+            t.escaped,
+            t.wall_time_s
+        );
+    }
+    if let Some(c) = &r.calibration {
+        match (c.converged, &r.calibrated_material) {
+            (Some(phi), Some(m)) => {
+                println!("calibrated: friction_angle = {phi:.3}° after {} rounds; material: {m}", c.iterates.len())
+            }
+            _ => {
+                return Err(Failure::Run(anyhow::anyhow!(
+                    "calibration did not converge: {} (rounds in {}, triaxial.json lists them)",
                     c.failure.as_deref().unwrap_or("unknown"),
                     out.display()
                 )));

@@ -15,6 +15,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::calibrate::repose::{ANGLE_TOLERANCE, ReposeSettings};
+use crate::calibrate::triaxial::{FailureRule, PHI_TOLERANCE, TriaxialSettings};
 use crate::input::InputError;
 
 /// Why a command failed.
@@ -257,6 +258,67 @@ pub enum CalibrateCommand {
         #[arg(long, value_name = "DIR", default_value = "out/calibrate-repose")]
         out: PathBuf,
     },
+    /// The virtual triaxial test of the SPH soil: a box sample between six servo-controlled
+    /// smooth plates, consolidated to each confining stress and sheared by the top and
+    /// bottom plates; failure on the low-pass-filtered vertical stress; the Mohr–Coulomb
+    /// envelope (c, φ with standard errors). Writes triaxial.json, per test series.csv and
+    /// stress_strain plots, and the Mohr-circle plot.
+    Triaxial {
+        /// Material file (TOML).
+        #[arg(long, value_name = "FILE")]
+        material: PathBuf,
+        /// Confining stresses, one test each (Pa) [default: 5e3,10e3,...,50e3].
+        #[arg(long, value_name = "PA,...", value_delimiter = ',')]
+        confining: Vec<f64>,
+        /// Sample width along x and y (m).
+        #[arg(long, value_name = "M", default_value_t = 0.1)]
+        width: f64,
+        /// Sample height (m) [default: 2 × width].
+        #[arg(long, value_name = "M")]
+        height: Option<f64>,
+        /// Particle spacing d0 (m) [default: width / 10].
+        #[arg(long, value_name = "M")]
+        spacing: Option<f64>,
+        /// Axial strain rate of the shear phase (1/s).
+        #[arg(long, value_name = "1/S", default_value_t = 0.2)]
+        strain_rate: f64,
+        /// Axial strain at which the shear phase ends.
+        #[arg(long, value_name = "STRAIN", default_value_t = 0.1)]
+        max_strain: f64,
+        /// Failure: the first peak of the filtered vertical stress (AGX), or the critical-state
+        /// plateau (the mean over the last fifth) [default: plateau for MCC, else peak].
+        #[arg(long, value_enum)]
+        failure: Option<FailureArg>,
+        /// Order of the Butterworth filter.
+        #[arg(long, value_name = "N", default_value_t = 4)]
+        filter_order: usize,
+        /// Shortest wavelength the filter keeps (axial strain).
+        #[arg(long, value_name = "STRAIN", default_value_t = 0.01)]
+        filter_wavelength: f64,
+        /// Floating-point precision of the runs.
+        #[arg(long, value_enum, default_value = "f32")]
+        precision: Precision,
+        /// Adjust the material's friction angle until the sample's envelope has this φ
+        /// (degrees); writes material.toml when the loop converges.
+        #[arg(long, value_name = "DEG")]
+        target_phi: Option<f64>,
+        /// The loop accepts a φ within this many degrees of the target, or within its
+        /// standard error if that is larger.
+        #[arg(long, value_name = "DEG", default_value_t = PHI_TOLERANCE)]
+        tolerance: f64,
+        /// Output folder.
+        #[arg(long, value_name = "DIR", default_value = "out/calibrate-triaxial")]
+        out: PathBuf,
+    },
+}
+
+/// How a triaxial test's failure point is picked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FailureArg {
+    /// The first local maximum of the filtered vertical stress.
+    Peak,
+    /// The critical state: the mean over the last fifth of the test.
+    Plateau,
 }
 
 /// Sweep subcommands.
@@ -607,6 +669,50 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 Precision::F64 => crate::scene::Precision::F64,
             };
             calibrate::repose(material, s, target_angle, tolerance, out)
+        }
+        Command::Calibrate {
+            calibrate:
+                CalibrateCommand::Triaxial {
+                    material,
+                    confining,
+                    width,
+                    height,
+                    spacing,
+                    strain_rate,
+                    max_strain,
+                    failure,
+                    filter_order,
+                    filter_wavelength,
+                    precision,
+                    target_phi,
+                    tolerance,
+                    out,
+                },
+        } => {
+            let mut s = TriaxialSettings::for_width(width);
+            if let Some(h) = height {
+                s.height = h;
+            }
+            if let Some(d) = spacing {
+                s.spacing = d;
+            }
+            if !confining.is_empty() {
+                s.confining = confining;
+            }
+            s.strain_rate = strain_rate;
+            s.max_strain = max_strain;
+            s.failure = match failure {
+                Some(FailureArg::Peak) => FailureRule::Peak,
+                Some(FailureArg::Plateau) => FailureRule::Plateau,
+                None => crate::calibrate::triaxial::default_rule(&material).map_err(Failure::Input)?,
+            };
+            s.filter_order = filter_order;
+            s.filter_wavelength = filter_wavelength;
+            s.precision = match precision {
+                Precision::F32 => crate::scene::Precision::F32,
+                Precision::F64 => crate::scene::Precision::F64,
+            };
+            calibrate::triaxial(material, s, target_phi, tolerance, out)
         }
         Command::Study { study: StudyCommand::Stability { cases, size, cases_dir, out } } => {
             let size = match size {

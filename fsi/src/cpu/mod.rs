@@ -956,7 +956,10 @@ impl<T: Real> CpuSph<T> {
             {
                 // A particle with wall or body markers in its support is in contact, not free:
                 // it keeps its stress, so that it resists penetration and carries basal
-                // friction.
+                // friction. Detachment counts the markers as neighbours (the indicator sums
+                // over both): a parcel whose support neither soil nor markers fill is
+                // detached, walls or not (a grain squeezed out between a grouser and a wall
+                // otherwise keeps a stress no neighbour balances).
                 let th = T::of(self.cfg.free_surface_threshold.unwrap_or(0.0));
                 let detach = T::of(DETACHED_THRESHOLD);
                 let rates = &self.rates[..n];
@@ -964,7 +967,7 @@ impl<T: Real> CpuSph<T> {
                     |(i, (f, d))| {
                         let free = !rates[i].contact;
                         *f = free && rates[i].fs < th;
-                        *d = free && rates[i].fs < detach;
+                        *d = rates[i].fs < detach;
                     },
                 );
             }

@@ -123,11 +123,12 @@ fn soil_rates(@builtin(global_invocation_id) gid: vec3<u32>) {
     var fs = rates[i].fs;
     if (FS) {
         fs = sym_min_eigenvalue(s.fs);
-        // A particle with wall or body markers in its support is in contact, not free.
+        // A particle with wall or body markers in its support is in contact, not free;
+        // detachment counts the markers as neighbours (fs sums over both).
         let free = near_markers == 0u;
         var flags = 0u;
         if (free && fs < prm.fs_threshold) { flags |= FLAG_FREE; }
-        if (free && fs < prm.detach_threshold) { flags |= FLAG_DETACHED; }
+        if (fs < prm.detach_threshold) { flags |= FLAG_DETACHED; }
         parts[i].flags = flags;
         atomicAdd(&info.pairs, pairs + near_markers);
     }

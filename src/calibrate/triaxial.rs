@@ -1,0 +1,875 @@
+//! `regolith calibrate triaxial`: the virtual triaxial test on the SPH soil (AGX's test).
+//!
+//! A box-shaped sample (`width` × `width` × `height`) stands between six rigid plates, each a
+//! box of BCE markers with free-slip (smooth) contact, so the sample deforms homogeneously as
+//! between lubricated platens. Gravity is off. Each plate's stress is its soil force over the
+//! sample's current face area; the sample's faces lie half a spacing inside the plates'
+//! surfaces (the markers sit on the surfaces, the soil's first layer one spacing in).
+//!
+//! 1. **Consolidation.** Every plate is servo-controlled towards the confining stress σ0: it
+//!    moves outward at `v = (σ − σ0) L / (2 M τ)` (L the sample's length along the plate's
+//!    axis, M the constrained modulus of the soil at σ0), so that the stress relaxes to σ0
+//!    with the time constant τ = `servo_crossings` × (longest side) / (P-wave speed). It ends
+//!    when the mean stress on every face over the last τ is within `tolerance` of σ0.
+//! 2. **Shear.** The lateral plates keep the servo; the top and bottom plates approach at a
+//!    constant speed, the axial strain rate `strain_rate`, until `max_strain`.
+//! 3. **Failure** (see [`super::lowpass`]): the vertical stress is low-pass filtered (a
+//!    zero-phase Butterworth of `filter_order` whose cutoff wavelength is `filter_wavelength`
+//!    of axial strain) and the failure point is its first local maximum at which it exceeds
+//!    `min_ratio` × the confining stress, or, for `failure = plateau` (the default for MCC,
+//!    and the fallback when no peak comes before the end), the mean over the last fifth of
+//!    the test (the critical state).
+//!
+//! The failure stresses of all tests give the Mohr–Coulomb envelope with standard errors
+//! ([`super::fit::mohr_coulomb`]).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::CommandError;
+use super::fit::{MohrCoulomb, mohr_coulomb, mohr_coulomb_cohesionless};
+use super::lowpass::{Butterworth, Failure, FailureKind, first_peak, plateau};
+use super::repose::material_table;
+use super::target::{TargetRun, TargetSettings, calibrate_to_target, write_calibrated};
+use crate::input::InputError;
+use crate::output::plot::{Figure, Panel, Series};
+use crate::output::write_figure;
+use crate::scene::{Precision, load_scene};
+use crate::sim::Simulation;
+use regolith_fsi::Real;
+use regolith_fsi::config::WallContact;
+use regolith_fsi::math::Sym3;
+
+/// Plate thickness in spacings (the marker layers cover a kernel support).
+const PLATE_SPACINGS: f64 = 3.0;
+
+/// The six plates, in scene order: (name, axis, outward sign).
+const PLATES: [(&str, usize, f64); 6] = [
+    ("x_min", 0, -1.0),
+    ("x_max", 0, 1.0),
+    ("y_min", 1, -1.0),
+    ("y_max", 1, 1.0),
+    ("bottom", 2, -1.0),
+    ("top", 2, 1.0),
+];
+
+/// Interval of the shear record (s): each sample is the mean of the exchanges in it.
+const SAMPLE_INTERVAL: f64 = 1e-3;
+
+/// Fraction of the shear phase averaged for a plateau (the critical state).
+const PLATEAU_FRACTION: f64 = 0.2;
+
+/// How the failure point is picked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FailureRule {
+    /// The first local maximum of the filtered vertical stress (AGX's rule; a plateau when
+    /// none comes before the end).
+    Peak,
+    /// The critical state: the mean of the filtered stresses over the last fifth of the test.
+    Plateau,
+}
+
+/// Settings of the test (the command's flags).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TriaxialSettings {
+    /// Sample width along x and y (m).
+    pub width: f64,
+    /// Sample height along z (m).
+    pub height: f64,
+    /// Particle spacing d0 (m).
+    pub spacing: f64,
+    /// Confining (consolidation) stresses, one test each (Pa, compression positive).
+    pub confining: Vec<f64>,
+    /// Axial strain rate of the shear phase (1/s).
+    pub strain_rate: f64,
+    /// Axial strain at which the shear phase ends.
+    pub max_strain: f64,
+    /// Consolidation ends when every face is within this fraction of the confining stress.
+    pub tolerance: f64,
+    /// Servo time constant in P-wave crossings of the sample's longest side.
+    pub servo_crossings: f64,
+    /// Failure rule.
+    pub failure: FailureRule,
+    /// Order of the Butterworth filter.
+    pub filter_order: usize,
+    /// Shortest wavelength the filter keeps, in axial strain.
+    pub filter_wavelength: f64,
+    /// A peak counts only where the vertical stress exceeds this multiple of the confining one.
+    pub min_ratio: f64,
+    /// Precision of the runs.
+    #[serde(serialize_with = "precision_name")]
+    pub precision: Precision,
+}
+
+fn precision_name<S: serde::Serializer>(p: &Precision, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(p.name())
+}
+
+/// The default confining stresses: AGX's ten, 5 to 50 kPa.
+pub fn default_confining() -> Vec<f64> {
+    (1..=10).map(|k| 5e3 * k as f64).collect()
+}
+
+impl TriaxialSettings {
+    /// The defaults for a sample `width` wide: twice as high, d0 = width / 10, AGX's ten
+    /// confining stresses, axial strain rate 0.5 /s to 10 % strain, servo τ = 10 P-wave
+    /// crossings, 1 % consolidation tolerance, a 4th-order filter keeping wavelengths of 1 %
+    /// strain and more, peaks above 1.25 σ0 (AGX's filter order and ratio).
+    pub fn for_width(width: f64) -> Self {
+        Self {
+            width,
+            height: 2.0 * width,
+            spacing: width / 10.0,
+            confining: default_confining(),
+            strain_rate: 0.2,
+            max_strain: 0.1,
+            tolerance: 0.01,
+            servo_crossings: 3.0,
+            failure: FailureRule::Peak,
+            filter_order: 4,
+            filter_wavelength: 0.01,
+            min_ratio: 1.25,
+            precision: Precision::F32,
+        }
+    }
+
+    /// Checks the settings; the error names the flag and what is allowed.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        use super::positive;
+        positive("--width", self.width)?;
+        positive("--height", self.height)?;
+        positive("--spacing", self.spacing)?;
+        positive("--strain-rate", self.strain_rate)?;
+        positive("--servo-crossings", self.servo_crossings)?;
+        positive("--filter-wavelength", self.filter_wavelength)?;
+        if self.width < 4.0 * self.spacing || self.height < 4.0 * self.spacing {
+            return Err((
+                "--spacing",
+                format!(
+                    "{} m leaves fewer than 4 spacings across the sample ({} × {} m); use ≤ {} m",
+                    self.spacing,
+                    self.width,
+                    self.height,
+                    self.width.min(self.height) / 4.0
+                ),
+            ));
+        }
+        if self.confining.is_empty() || self.confining.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+            return Err(("--confining", format!("must be one or more stresses > 0 Pa (got {:?})", self.confining)));
+        }
+        if self.confining.len() < 2 {
+            return Err((
+                "--confining",
+                format!("needs at least two stresses: an envelope needs two Mohr circles (got {:?})", self.confining),
+            ));
+        }
+        if !(self.max_strain > 0.0 && self.max_strain <= 0.3) {
+            return Err((
+                "--max-strain",
+                format!("must lie in (0, 0.3]: the plates cover a sample bulged by 15 % (got {})", self.max_strain),
+            ));
+        }
+        if !(self.tolerance > 0.0 && self.tolerance < 0.5) {
+            return Err(("--tolerance", format!("must lie in (0, 0.5) (got {})", self.tolerance)));
+        }
+        if !(1..=8).contains(&self.filter_order) {
+            return Err(("--filter-order", format!("must be 1 to 8 (got {})", self.filter_order)));
+        }
+        if !(self.min_ratio.is_finite() && self.min_ratio >= 1.0) {
+            return Err(("--min-ratio", format!("must be ≥ 1 (got {})", self.min_ratio)));
+        }
+        if self.filter_wavelength >= self.max_strain {
+            return Err((
+                "--filter-wavelength",
+                format!("{} must be shorter than --max-strain {}", self.filter_wavelength, self.max_strain),
+            ));
+        }
+        Ok(())
+    }
+
+    fn plate(&self) -> f64 {
+        PLATE_SPACINGS * self.spacing
+    }
+
+    /// How far the plates reach past the sample's lateral faces, for the sample to bulge (a
+    /// lateral strain of 15 %, what 30 % axial strain at constant volume gives).
+    fn margin(&self) -> f64 {
+        0.15 * self.width + 2.0 * self.spacing
+    }
+}
+
+/// The scene of one test: the material (renamed "soil"), the sample and the six plates, no
+/// gravity, in an open container.
+pub fn scene_text(material: &toml::Table, s: &TriaxialSettings, end_time: f64) -> Result<String, CommandError> {
+    let d0 = s.spacing;
+    // Whole spacings across, and a lattice offset by half a spacing so that particle centres
+    // lie symmetric about the origin, d0/2 inside the faces.
+    let (nw, nh) = ((s.width / d0).round().max(4.0), (s.height / d0).round().max(4.0));
+    let (w, h) = (nw * d0, nh * d0);
+    let (t, m) = (s.plate(), s.margin());
+    let half_box = |len: f64| ((0.5 * len + 2.0 * t + m + 2.0 * d0) / d0).ceil() + 0.5;
+    let (bx, bz) = (half_box(w) * d0, half_box(h) * d0);
+    let mut mat = material.clone();
+    mat.insert("name".into(), toml::Value::String("soil".into()));
+    let mut materials = toml::Table::new();
+    materials.insert("materials".into(), toml::Value::Array(vec![toml::Value::Table(mat)]));
+    let materials = toml::to_string(&materials)
+        .map_err(|e| CommandError::Output(format!("cannot write the test's material section: {e}")))?;
+    let mut text = format!(
+        "# regolith calibrate triaxial: one test (written by the command; `regolith run` runs\n\
+         # the sample and plates, but the servo control and the plates' smooth contact are the\n\
+         # command's).\n\
+         [simulation]\n\
+         end_time = {end_time}\n\
+         precision = \"{prec}\"\n\
+         gravity = [0.0, 0.0, 0.0]\n\n\
+         [sph]\n\
+         spacing = {d0}\n\n\
+         {materials}\n\
+         [container]\n\
+         min = [{mx}, {mx}, {mz}]\n\
+         max = [{bx}, {bx}, {bz}]\n\
+         walls = false\n\n\
+         [[soil_blocks]]\n\
+         material = \"soil\"\n\
+         shape = \"box\"\n\
+         min = [{lx}, {lx}, {lz}]\n\
+         max = [{hx}, {hx}, {hz}]\n",
+        prec = s.precision.name(),
+        mx = -bx,
+        mz = -bz,
+        lx = -0.5 * w,
+        lz = -0.5 * h,
+        hx = 0.5 * w,
+        hz = 0.5 * h,
+    );
+    let dims = [w, w, h];
+    for (name, axis, sign) in PLATES {
+        // The side plates reach over the top and bottom plates' thickness (the edges stay
+        // closed while the sample shortens); top and bottom cover the bulged sample.
+        let mut size = [w + 2.0 * m, w + 2.0 * m, h + d0 + 2.0 * t];
+        size[axis] = t;
+        let mut pos = [0.0; 3];
+        pos[axis] = sign * (0.5 * dims[axis] + 0.5 * d0 + 0.5 * t);
+        text += &format!(
+            "\n[[bodies]]\n\
+             name = \"{name}\"\n\
+             shape = {{ type = \"box\", size = [{}, {}, {}] }}\n\
+             position = [{}, {}, {}]\n\
+             motion = {{ type = \"prescribed\", linear_velocity = [0.0, 0.0, 0.0] }}\n\
+             mass = 1.0\n",
+            size[0], size[1], size[2], pos[0], pos[1], pos[2]
+        );
+    }
+    text += "\n[output]\nmcap = false\n";
+    Ok(text)
+}
+
+/// One sample of a test's record.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Sample {
+    /// Simulated time (s).
+    pub time: f64,
+    /// Axial strain since the end of consolidation (shortening positive).
+    pub axial_strain: f64,
+    /// Volumetric strain since the end of consolidation (compaction positive).
+    pub volumetric_strain: f64,
+    /// Vertical stress: mean of top and bottom (Pa, compression positive).
+    pub vertical: f64,
+    /// Lateral stress: mean of the four side plates (Pa).
+    pub lateral: f64,
+}
+
+/// One test.
+#[derive(Clone, Debug, Serialize)]
+pub struct TriaxialTest {
+    /// Confining stress asked for (Pa).
+    pub confining: f64,
+    /// Soil particles.
+    pub particles: usize,
+    /// Consolidation time (s).
+    pub consolidation_time: f64,
+    /// Mean stress on each face over the last servo time constant of consolidation (Pa), in
+    /// the order x_min, x_max, y_min, y_max, bottom, top.
+    pub consolidated_stresses: [f64; 6],
+    /// Sample size after consolidation (m).
+    pub consolidated_size: [f64; 3],
+    /// Servo time constant (s) and the constrained modulus it assumes (Pa).
+    pub servo_tau: f64,
+    /// Constrained modulus of the soil at the confining stress (Pa).
+    pub constrained_modulus: f64,
+    /// Inertial number of the shear phase, `ε̇ d0 / √(σ0/ρ)` (quasi-static below about 1e-3).
+    pub inertial_number: f64,
+    /// Failure point.
+    pub failure: Failure,
+    /// Axial strain at failure.
+    pub strain_at_failure: f64,
+    /// Vertical (major principal) stress at failure (Pa).
+    pub vertical_at_failure: f64,
+    /// Lateral (minor principal) stress at failure (Pa).
+    pub lateral_at_failure: f64,
+    /// Particles that left the sample's box by more than a spacing (0 in a good test).
+    pub escaped: usize,
+    /// Soil steps.
+    pub steps: u64,
+    /// Wall-clock time (s).
+    pub wall_time_s: f64,
+    /// The test's folder.
+    pub dir: String,
+    /// Its plots.
+    pub plots: Vec<String>,
+    /// The shear record.
+    #[serde(skip)]
+    pub series: Vec<Sample>,
+    /// The filtered vertical and lateral stresses, per sample.
+    #[serde(skip)]
+    pub filtered: Vec<(f64, f64)>,
+}
+
+/// The failure rule a material gets by default: the critical-state plateau for Modified Cam
+/// Clay (it hardens or softens towards it), the first peak otherwise.
+pub fn default_rule(material: &Path) -> Result<FailureRule, InputError> {
+    let m = material_table(material)?;
+    Ok(match m.get("model").and_then(|v| v.as_str()) {
+        Some("mcc") => FailureRule::Plateau,
+        _ => FailureRule::Peak,
+    })
+}
+
+/// Writes the scene into `dir` and runs one test at confining stress `sigma0`.
+pub fn run_test(
+    material: &toml::Table,
+    s: &TriaxialSettings,
+    sigma0: f64,
+    dir: &Path,
+) -> Result<TriaxialTest, CommandError> {
+    std::fs::create_dir_all(dir).map_err(|e| CommandError::Output(format!("cannot create {}: {e}", dir.display())))?;
+    // The scene's end time only bounds the run; the servo loop decides when it stops.
+    let end = 1e3;
+    let path = dir.join("scene.toml");
+    let text = scene_text(material, s, end)?;
+    std::fs::write(&path, text).map_err(|e| CommandError::Output(format!("cannot write {}: {e}", path.display())))?;
+    let scene = load_scene(&path, &[])?;
+    let mut test = match s.precision {
+        Precision::F32 => run_scene::<f32>(&scene, s, sigma0),
+        Precision::F64 => run_scene::<f64>(&scene, s, sigma0),
+    }?;
+    test.dir = dir.display().to_string();
+    test.plots = write_test(&test, dir)?.iter().map(|p| p.display().to_string()).collect();
+    Ok(test)
+}
+
+/// A test's `series.csv` and stress–strain plot, in its folder.
+fn write_test(t: &TriaxialTest, dir: &Path) -> Result<Vec<PathBuf>, CommandError> {
+    let out_err = |e: String| CommandError::Output(e);
+    let csv = dir.join("series.csv");
+    let text: String = std::iter::once(
+        "time,axial_strain,volumetric_strain,vertical_stress,lateral_stress,vertical_filtered,lateral_filtered\n"
+            .to_string(),
+    )
+    .chain(t.series.iter().zip(&t.filtered).map(|(r, (fv, fh))| {
+        format!("{},{},{},{},{},{},{}\n", r.time, r.axial_strain, r.volumetric_strain, r.vertical, r.lateral, fv, fh)
+    }))
+    .collect();
+    std::fs::write(&csv, text).map_err(|e| out_err(format!("cannot write {}: {e}", csv.display())))?;
+    write_figure(&stress_strain_figure(t), dir, "stress_strain").map_err(|e| out_err(e.to_string()))
+}
+
+/// The plates' surfaces facing the sample, per axis (min side, max side), m.
+fn surfaces<T: Real>(sim: &Simulation<T>, t: f64) -> [[f64; 2]; 3] {
+    let o: Vec<[f64; 3]> = sim.bodies().map(|b| sim.body_state(b).origin).collect();
+    [0, 1, 2].map(|a| [o[2 * a][a] + 0.5 * t, o[2 * a + 1][a] - 0.5 * t])
+}
+
+/// Stress on each face of the sample (compression positive): the soil's force along the
+/// face's outward normal on every marker at or beyond the face's plate surface, whichever
+/// plate it belongs to, over the face's current area. The plates overlap at the sample's
+/// edges (each reaches past the others so that the corners stay closed as the sample
+/// deforms), and there the soil pushes on the markers of two plates at once: a per-plate
+/// force would miss the part of a face's load that the neighbouring plate's markers carry.
+/// `sf` are the plate surfaces, `size` the sample's size.
+fn face_stresses<T: Real>(sim: &Simulation<T>, sf: [[f64; 2]; 3], size: [f64; 3], d0: f64) -> [f64; 6] {
+    let f = &sim.system.fluid;
+    let mut force = [0.0; 6];
+    for (x, fm) in f.marker_positions().iter().zip(f.marker_forces()) {
+        let (x, fm) = ([x.x.as_f64(), x.y.as_f64(), x.z.as_f64()], [fm.x.as_f64(), fm.y.as_f64(), fm.z.as_f64()]);
+        for (k, (_, axis, sign)) in PLATES.iter().enumerate() {
+            let surface = sf[*axis][(*sign > 0.0) as usize];
+            if sign * (x[*axis] - surface) >= -0.25 * d0 {
+                force[k] += sign * fm[*axis];
+            }
+        }
+    }
+    std::array::from_fn(|k| {
+        let axis = PLATES[k].1;
+        force[k] / (size[(axis + 1) % 3] * size[(axis + 2) % 3])
+    })
+}
+
+fn run_scene<T: Real>(
+    scene: &crate::scene::Scene,
+    s: &TriaxialSettings,
+    sigma0: f64,
+) -> Result<TriaxialTest, CommandError> {
+    let started = Instant::now();
+    let run_err = |e: String| CommandError::Run(format!("{}: {e}", scene.path.display()));
+    let mut sim = Simulation::<T>::new(scene).map_err(|e| run_err(e.to_string()))?;
+    let (d0, t) = (s.spacing, s.plate());
+    // Free slip on every plate: the normal of each marker is its plate's inward normal.
+    {
+        let bodies = &sim.system.interface.bodies;
+        if bodies.len() != 6 {
+            return Err(run_err(format!("the test needs its six plates as FSI bodies, found {}", bodies.len())));
+        }
+        let markers = bodies.last().map_or(0, |b| b.markers.end);
+        let mut normals = vec![[0.0; 3]; markers];
+        for (b, (_, axis, sign)) in bodies.iter().zip(PLATES) {
+            for k in b.markers.clone() {
+                normals[k][axis] = -sign;
+            }
+        }
+        let mut contact = vec![WallContact::Rough];
+        contact.extend([WallContact::Smooth; 6]);
+        sim.system.fluid.set_wall_contact(&contact, &normals).map_err(|e| run_err(e.to_string()))?;
+    }
+    let f = &sim.system.fluid;
+    let particles = f.len();
+    let density = f.materials().first().map_or(1.0, |m| m.density.as_f64());
+    let modulus = match (f.materials().first(), f.states().first()) {
+        (Some(m), Some(st)) => m.moduli(&Sym3::iso(T::of(-sigma0)), st).p_wave().as_f64(),
+        _ => return Err(run_err("the sample has no particle".into())),
+    };
+    if !(modulus.is_finite() && modulus > 0.0) {
+        return Err(run_err(format!(
+            "the soil's constrained modulus at the confining stress {sigma0} Pa is {modulus} Pa; the servo needs a stiff sample"
+        )));
+    }
+    let size_of = |sf: [[f64; 2]; 3]| sf.map(|[lo, hi]| hi - lo - d0);
+    let size0 = size_of(surfaces(&sim, t));
+    let longest = size0.iter().copied().fold(0.0, f64::max);
+    let wave_speed = (modulus / density).sqrt();
+    let tau = s.servo_crossings * longest / wave_speed;
+    // Exchanges of a quarter sample interval: the face stresses come from the markers'
+    // forces of each exchange's last step, and a record sample is the mean of its four.
+    sim.system.exchange_interval = 0.25 * SAMPLE_INTERVAL;
+    let window_time = tau;
+    // PI control: v = sign · L/(2 M τ) · (e + ∫e dt / T_i), e = σ − σ0. For a sample of
+    // constrained modulus M the error then obeys e'' + e'/τ + e/(τ T_i) = 0, critically
+    // damped at T_i = 4τ; the integral supplies the steady plate speed that a sample flowing
+    // at a constant rate needs, so the lateral stress holds σ0 through the shear instead of
+    // lagging by the proportional offset.
+    let t_i = 4.0 * tau;
+    let mut integral = [0.0f64; 6];
+    let mut servo = |sim: &mut Simulation<T>, stresses: &[f64; 6], size: [f64; 3], dt: f64, axial: Option<f64>| {
+        let bodies: Vec<_> = sim.bodies().collect();
+        for (k, b) in bodies.into_iter().enumerate() {
+            let (_, axis, sign) = PLATES[k];
+            let v = match axial {
+                Some(v) if axis == 2 => -sign * v,
+                _ => {
+                    let e = stresses[k] - sigma0;
+                    integral[k] += e * dt;
+                    sign * (e + integral[k] / t_i) * size[axis] / (2.0 * modulus * tau)
+                }
+            };
+            let mut lin = [0.0; 3];
+            lin[axis] = v;
+            sim.set_body_velocity(b, lin, [0.0; 3]);
+        }
+    };
+    let exchange = |sim: &mut Simulation<T>| -> Result<([f64; 3], [f64; 6], f64), CommandError> {
+        let t0 = sim.time();
+        sim.step_max(None).map_err(|e| run_err(e.to_string()))?;
+        let sf = surfaces(sim, t);
+        let size = size_of(sf);
+        Ok((size, face_stresses(sim, sf, size, d0), sim.time() - t0))
+    };
+    // Consolidation.
+    let max_time = 40.0 * tau;
+    let mut history: Vec<(f64, [f64; 6])> = Vec::new();
+    let consolidated = loop {
+        let (size, st, dt) = exchange(&mut sim)?;
+        history.push((sim.time(), st));
+        let now = sim.time();
+        let first = history.partition_point(|(time, _)| *time < now - window_time);
+        let tail = &history[first..];
+        let mean: [f64; 6] = std::array::from_fn(|k| tail.iter().map(|r| r.1[k]).sum::<f64>() / tail.len() as f64);
+        if now > 2.0 * tau && mean.iter().all(|m| (m - sigma0).abs() <= s.tolerance * sigma0) {
+            break mean;
+        }
+        if now > max_time {
+            let mean: Vec<String> = mean.iter().map(|m| format!("{m:.4e}")).collect();
+            return Err(run_err(format!(
+                "consolidation to {sigma0} Pa did not settle within {:.0} % in {:.3} s (40 servo time constants): face stresses {} Pa",
+                100.0 * s.tolerance,
+                max_time,
+                mean.join(", ")
+            )));
+        }
+        servo(&mut sim, &st, size, dt, None);
+    };
+    drop(history);
+    let consolidation_time = sim.time();
+    let size_c = size_of(surfaces(&sim, t));
+    let volume_c = size_c[0] * size_c[1] * size_c[2];
+    // Shear.
+    let v_axial = 0.5 * s.strain_rate * size_c[2];
+    let mut series = Vec::new();
+    let (mut size, mut st, mut dt) = (size_c, [sigma0; 6], 0.0);
+    let (mut acc, mut n_acc, mut next) = ([0.0f64; 6], 0usize, sim.time() + SAMPLE_INTERVAL);
+    loop {
+        servo(&mut sim, &st, size, dt, Some(v_axial));
+        (size, st, dt) = exchange(&mut sim)?;
+        for k in 0..6 {
+            acc[k] += st[k];
+        }
+        n_acc += 1;
+        if sim.time() < next - 1e-12 {
+            continue;
+        }
+        next += SAMPLE_INTERVAL;
+        let m = acc.map(|a| a / n_acc as f64);
+        (acc, n_acc) = ([0.0; 6], 0);
+        let axial_strain = 1.0 - size[2] / size_c[2];
+        series.push(Sample {
+            time: sim.time(),
+            axial_strain,
+            volumetric_strain: 1.0 - size[0] * size[1] * size[2] / volume_c,
+            vertical: 0.5 * (m[4] + m[5]),
+            lateral: 0.25 * (m[0] + m[1] + m[2] + m[3]),
+        });
+        if axial_strain >= s.max_strain {
+            break;
+        }
+    }
+    // Failure.
+    let de = s.strain_rate * SAMPLE_INTERVAL;
+    let cutoff = 2.0 * de / s.filter_wavelength;
+    let filter = Butterworth::new(s.filter_order, cutoff).map_err(|e| {
+        CommandError::Input(InputError::flag(
+            "--strain-rate",
+            format!(
+                "{e}: {} /s over a sample interval of {SAMPLE_INTERVAL} s is {de:.2e} strain per sample, too coarse for --filter-wavelength {}",
+                s.strain_rate, s.filter_wavelength
+            ),
+        ))
+    })?;
+    let fv = filter.filtfilt(&series.iter().map(|r| r.vertical).collect::<Vec<_>>());
+    let fh = filter.filtfilt(&series.iter().map(|r| r.lateral).collect::<Vec<_>>());
+    let half = ((s.filter_wavelength / de).round() as usize).max(1);
+    let floor = s.min_ratio * sigma0;
+    let peak = match s.failure {
+        FailureRule::Peak => first_peak(&fv, half, floor),
+        FailureRule::Plateau => None,
+    };
+    let (failure, strain_f, v_f, h_f) = match peak {
+        Some(i) => (Failure { kind: FailureKind::Peak, index: i, value: fv[i] }, series[i].axial_strain, fv[i], fh[i]),
+        None => {
+            let Some((i, v)) = plateau(&fv, PLATEAU_FRACTION) else {
+                return Err(run_err("the shear phase recorded no sample".into()));
+            };
+            let h = fh[i..].iter().sum::<f64>() / (fh.len() - i) as f64;
+            (Failure { kind: FailureKind::Plateau, index: i, value: v }, series[i].axial_strain, v, h)
+        }
+    };
+    // Particles that left the sample (through a gap between plates).
+    let sf = surfaces(&sim, t);
+    let f = &sim.system.fluid;
+    let escaped = f
+        .positions()
+        .iter()
+        .filter(|p| {
+            let p = [p.x.as_f64(), p.y.as_f64(), p.z.as_f64()];
+            (0..3).any(|a| p[a] < sf[a][0] - d0 || p[a] > sf[a][1] + d0)
+        })
+        .count();
+    Ok(TriaxialTest {
+        confining: sigma0,
+        particles,
+        consolidation_time,
+        consolidated_stresses: consolidated,
+        consolidated_size: size_c,
+        servo_tau: tau,
+        constrained_modulus: modulus,
+        inertial_number: s.strain_rate * d0 / (sigma0 / density).sqrt(),
+        failure,
+        strain_at_failure: strain_f,
+        vertical_at_failure: v_f,
+        lateral_at_failure: h_f,
+        escaped,
+        steps: f.steps(),
+        wall_time_s: started.elapsed().as_secs_f64(),
+        dir: String::new(),
+        plots: Vec::new(),
+        filtered: fv.into_iter().zip(fh).collect(),
+        series,
+    })
+}
+
+/// What `regolith calibrate triaxial` reads.
+#[derive(Clone, Debug)]
+pub struct TriaxialInputs {
+    /// Material file.
+    pub material: PathBuf,
+    /// Test settings.
+    pub settings: TriaxialSettings,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Adjust the material's friction angle until the sample's measured φ is this (degrees).
+    pub target_phi: Option<f64>,
+    /// The loop accepts a φ within this many degrees of the target, or within its standard
+    /// error if that is larger.
+    pub tolerance_phi: f64,
+}
+
+/// Default smallest tolerance of the φ loop (degrees).
+pub const PHI_TOLERANCE: f64 = 0.5;
+
+/// `triaxial.json`, with AGX's field names for the envelope and the failure stresses.
+#[derive(Clone, Debug, Serialize)]
+pub struct TriaxialReport {
+    /// "triaxial_test".
+    pub test: &'static str,
+    /// The material file.
+    pub material: String,
+    /// The material's friction angle and cohesion as typed (degrees, Pa), when it has them.
+    pub material_phi: Option<f64>,
+    /// The material's cohesion (Pa).
+    pub material_c: Option<f64>,
+    /// Measured cohesion (Pa).
+    pub c: f64,
+    /// Measured friction angle (degrees).
+    pub phi: f64,
+    /// Standard error of c (Pa); `null` with fewer than three tests.
+    #[serde(rename = "standardError_c")]
+    pub standard_error_c: Option<f64>,
+    /// Standard error of φ (degrees).
+    #[serde(rename = "standardError_phi")]
+    pub standard_error_phi: Option<f64>,
+    /// Friction angle of the cohesionless envelope through the origin (degrees): for a
+    /// critical state (Cam Clay, `q = M p`) the angle to compare with asin(3M / (6 + M)).
+    #[serde(rename = "phi_c0")]
+    pub phi_cohesionless: f64,
+    /// Its standard error (degrees); `null` with one test.
+    #[serde(rename = "standardError_phi_c0")]
+    pub standard_error_phi_cohesionless: Option<f64>,
+    /// Lateral stress at failure of each test (Pa).
+    #[serde(rename = "consolidationStress")]
+    pub consolidation_stress: Vec<f64>,
+    /// Vertical stress at failure of each test (Pa).
+    #[serde(rename = "verticalStress")]
+    pub vertical_stress: Vec<f64>,
+    /// Axial strain at failure of each test.
+    #[serde(rename = "strainAtFailure")]
+    pub strain_at_failure: Vec<f64>,
+    /// The filter (AGX's `FilterParameters`): order, cutoff as a fraction of Nyquist, and the
+    /// shortest strain wavelength kept.
+    #[serde(rename = "FilterParameters")]
+    pub filter: FilterReport,
+    /// Every test.
+    pub tests: Vec<TriaxialTest>,
+    /// Settings.
+    pub settings: TriaxialSettings,
+    /// Plots written.
+    pub plots: Vec<String>,
+    /// The calibration loop (`--target-phi`).
+    pub calibration: Option<TargetRun>,
+    /// The calibrated material file, when the loop converged.
+    pub calibrated_material: Option<String>,
+}
+
+/// The filter's parameters as reported.
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct FilterReport {
+    /// Butterworth order.
+    pub filter_order: usize,
+    /// Cutoff, fraction of the Nyquist frequency of the per-exchange record.
+    pub critical_frequency: f64,
+    /// Shortest wavelength kept, axial strain.
+    pub wavelength_strain: f64,
+    /// A peak counts only above this multiple of the confining stress.
+    pub min_vert_stress_to_cons_stress_ratio: f64,
+    /// "peak" or "plateau".
+    pub failure_rule: FailureRule,
+}
+
+fn number(m: &toml::Table, key: &str) -> Option<f64> {
+    m.get(key).and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+}
+
+/// Runs every test (in parallel), fits the envelope, writes everything.
+fn run_all(
+    material: &toml::Table,
+    s: &TriaxialSettings,
+    out: &Path,
+) -> Result<(Vec<TriaxialTest>, MohrCoulomb), CommandError> {
+    let tests: Vec<TriaxialTest> = s
+        .confining
+        .par_iter()
+        .enumerate()
+        .map(|(k, &sigma0)| {
+            let t = run_test(material, s, sigma0, &out.join(format!("test_{:02}", k + 1)))?;
+            eprintln!(
+                "  σ3 = {sigma0:.4e} Pa: failure ({:?}) at σ1 = {:.4e} Pa, σ3 = {:.4e} Pa, axial strain {:.4} ({:.1} s)",
+                t.failure.kind, t.vertical_at_failure, t.lateral_at_failure, t.strain_at_failure, t.wall_time_s
+            );
+            Ok(t)
+        })
+        .collect::<Result<_, CommandError>>()?;
+    let s3: Vec<f64> = tests.iter().map(|t| t.lateral_at_failure).collect();
+    let s1: Vec<f64> = tests.iter().map(|t| t.vertical_at_failure).collect();
+    let fit = mohr_coulomb(&s3, &s1).map_err(|e| {
+        CommandError::Run(format!("the failure stresses σ3 = {s3:?} Pa, σ1 = {s1:?} Pa give no envelope: {e}"))
+    })?;
+    Ok((tests, fit))
+}
+
+/// Runs the tests, fits the envelope and writes `triaxial.json`, per test `test_NN/` with its
+/// scene, `series.csv` and the stress–strain plot, and the Mohr-circle plot. With a target φ,
+/// runs the calibration loop over the material's friction angle (each round in
+/// `iteration_<k>/`) and writes `material.toml` when it converges.
+pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, CommandError> {
+    let s = &inp.settings;
+    s.check().map_err(|(flag, msg)| CommandError::Input(InputError::flag(flag, msg)))?;
+    let material = material_table(&inp.material)?;
+    let Some(target) = inp.target_phi else {
+        let (tests, fit) = run_all(&material, s, &inp.out)?;
+        return report(inp, &inp.out, &material, tests, fit, None, None);
+    };
+    if !(target.is_finite() && target > 0.0 && target < 90.0) {
+        return Err(InputError::flag("--target-phi", format!("must be between 0 and 90 degrees (got {target})")).into());
+    }
+    if !(inp.tolerance_phi.is_finite() && inp.tolerance_phi > 0.0) {
+        return Err(InputError::flag("--tolerance", format!("must be > 0 degrees (got {})", inp.tolerance_phi)).into());
+    }
+    if s.confining.len() < 3 {
+        return Err(InputError::flag(
+            "--confining",
+            "--target-phi needs at least three confining stresses (the loop uses φ's standard error)".to_string(),
+        )
+        .into());
+    }
+    let phi0 = number(&material, "friction_angle").ok_or_else(|| {
+        InputError::key(&inp.material, "friction_angle", "is needed for --target-phi: the loop adjusts it")
+    })?;
+    let settings = TargetSettings {
+        target,
+        tolerance_floor: inp.tolerance_phi,
+        range: super::repose::PHI_RANGE,
+        max_evaluations: super::repose::MAX_EVALUATIONS,
+    };
+    let mut last = None;
+    let mut k = 0;
+    let loop_run = calibrate_to_target(&settings, phi0, |phi| {
+        k += 1;
+        let mut m = material.clone();
+        m.insert("friction_angle".into(), phi.into());
+        let dir = inp.out.join(format!("iteration_{k}"));
+        let (tests, fit) = run_all(&m, s, &dir)?;
+        let se = fit.se_phi.unwrap_or(0.0);
+        eprintln!("  friction_angle = {phi:.3}°: sample φ = {:.2}° ± {:.2}° (target {target}°)", fit.phi, se);
+        let out = (fit.phi, se);
+        last = Some((m, tests, fit, dir));
+        Ok::<_, CommandError>(out)
+    })?;
+    let Some((m, tests, fit, dir)) = last else {
+        return Err(CommandError::Run(format!("{}: the calibration loop ran no test", inp.material.display())));
+    };
+    let written = match loop_run.converged {
+        Some(phi) => Some(write_calibrated(
+            &inp.material,
+            phi,
+            &format!(
+                "`regolith calibrate triaxial --target-phi {target}`: friction_angle set so that the SPH sample's\n# triaxial envelope has the target angle (see triaxial.json)"
+            ),
+            &inp.out.join("material.toml"),
+        )?),
+        None => None,
+    };
+    report(inp, &dir, &m, tests, fit, Some(loop_run), written)
+}
+
+fn report(
+    inp: &TriaxialInputs,
+    dir: &Path,
+    material: &toml::Table,
+    tests: Vec<TriaxialTest>,
+    fit: MohrCoulomb,
+    calibration: Option<TargetRun>,
+    calibrated_material: Option<String>,
+) -> Result<TriaxialReport, CommandError> {
+    let s = &inp.settings;
+    let out_err = |e: String| CommandError::Output(e);
+    let mut plots: Vec<PathBuf> = tests.iter().flat_map(|t| t.plots.iter().map(PathBuf::from)).collect();
+    let s3: Vec<f64> = tests.iter().map(|t| t.lateral_at_failure).collect();
+    let s1: Vec<f64> = tests.iter().map(|t| t.vertical_at_failure).collect();
+    plots.extend(write_figure(&super::mohr_figure(&s3, &s1, &fit), dir, "mohr").map_err(|e| out_err(e.to_string()))?);
+    let (phi0, se_phi0) = mohr_coulomb_cohesionless(&s3, &s1).map_err(|e| {
+        CommandError::Run(format!("the failure stresses σ3 = {s3:?} Pa, σ1 = {s1:?} Pa give no envelope: {e}"))
+    })?;
+    let de = s.strain_rate * SAMPLE_INTERVAL;
+    let report = TriaxialReport {
+        test: "triaxial_test",
+        material: inp.material.display().to_string(),
+        material_phi: number(material, "friction_angle"),
+        material_c: number(material, "cohesion"),
+        c: fit.c,
+        phi: fit.phi,
+        standard_error_c: fit.se_c,
+        standard_error_phi: fit.se_phi,
+        phi_cohesionless: phi0,
+        standard_error_phi_cohesionless: se_phi0,
+        consolidation_stress: s3,
+        vertical_stress: s1,
+        strain_at_failure: tests.iter().map(|t| t.strain_at_failure).collect(),
+        filter: FilterReport {
+            filter_order: s.filter_order,
+            critical_frequency: 2.0 * de / s.filter_wavelength,
+            wavelength_strain: s.filter_wavelength,
+            min_vert_stress_to_cons_stress_ratio: s.min_ratio,
+            failure_rule: s.failure,
+        },
+        tests,
+        settings: s.clone(),
+        plots: plots.iter().map(|p| p.display().to_string()).collect(),
+        calibration,
+        calibrated_material,
+    };
+    std::fs::create_dir_all(&inp.out).map_err(|e| out_err(format!("cannot create {}: {e}", inp.out.display())))?;
+    let json = inp.out.join("triaxial.json");
+    let text = serde_json::to_string_pretty(&report).map_err(|e| out_err(e.to_string()))?;
+    std::fs::write(&json, text).map_err(|e| out_err(format!("cannot write {}: {e}", json.display())))?;
+    Ok(report)
+}
+
+/// Vertical and lateral stress against axial strain, raw and filtered, with the failure point.
+pub fn stress_strain_figure(t: &TriaxialTest) -> Figure {
+    let e: Vec<f64> = t.series.iter().map(|r| r.axial_strain).collect();
+    let pts = |f: &dyn Fn(usize) -> f64| e.iter().enumerate().map(|(i, x)| (*x, f(i))).collect::<Vec<_>>();
+    Figure {
+        panels: vec![Panel {
+            title: format!("triaxial test, confining {:.3e} Pa", t.confining),
+            x_label: "axial strain".into(),
+            y_label: "stress (Pa)".into(),
+            x_log: false,
+            y_log: false,
+            series: vec![
+                Series::points("vertical", pts(&|i| t.series[i].vertical)),
+                Series::points("lateral", pts(&|i| t.series[i].lateral)),
+                Series::line("vertical, filtered", pts(&|i| t.filtered[i].0)),
+                Series::line("lateral, filtered", pts(&|i| t.filtered[i].1)),
+                Series::points(
+                    format!("failure ({:?}): σ1 = {:.3e} Pa", t.failure.kind, t.vertical_at_failure),
+                    vec![(t.strain_at_failure, t.vertical_at_failure)],
+                ),
+            ],
+            x_range: None,
+            y_range: None,
+        }],
+    }
+}
