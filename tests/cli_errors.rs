@@ -306,4 +306,18 @@ fn calibrate_triaxial_flags_and_materials_are_checked_before_running() {
         &["calibrate", "triaxial", "--material", "no/such/file.toml", "--out", &o],
         "no/such/file.toml",
     );
+    // The runner's flags: each belongs to one runner.
+    assert_one_line_error(&["calibrate", "triaxial", "--material", sand, "--jobs", "0", "--out", &o], "--jobs");
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--address", "auto", "--out", &o],
+        "--address: applies to --runner ray only",
+    );
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--runner", "ray", "--jobs", "2", "--out", &o],
+        "--jobs: applies to --runner threads only",
+    );
+    assert_one_line_error(
+        &["study", "stability", "--runner", "ray", "--num-cpus", "0", "--out", &o],
+        "--num-cpus: must be a number > 0",
+    );
 }

@@ -263,3 +263,33 @@ fn soil_thrown_out_of_the_domain_stops_the_run_loudly() {
     assert_eq!(s["escaped_particles"], 64);
     assert!(s["error"].as_str().is_some_and(|m| m.contains("left the domain")), "{}", s["error"]);
 }
+
+#[test]
+fn the_stability_suite_runs_on_the_shared_runner_and_resumes() {
+    // Two cheap cases on two threads: each is one record of results.jsonl; a rerun with
+    // --resume runs neither and writes the same table; without it both run again.
+    let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stability_batch");
+    let _ = std::fs::remove_dir_all(&out);
+    let run = |extra: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_regolith"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(["study", "stability", "--cases", "fixed_step_refused,jet_at_wall", "--out"])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let first = run(&["--jobs", "2"]);
+    assert!(first.contains("2 points, 0 already recorded, 2 to run on 2 thread(s)"), "{first}");
+    let table = std::fs::read_to_string(out.join("stability.json")).expect("table");
+    let records = regolith::sweep::read_all(&out).expect("records");
+    assert_eq!(records.len(), 2);
+    assert!(records.iter().all(|r| r.ok()));
+    let resumed = run(&["--resume"]);
+    assert!(resumed.contains("2 already recorded, 0 to run"), "{resumed}");
+    assert_eq!(std::fs::read_to_string(out.join("stability.json")).expect("table"), table);
+    let again = run(&[]);
+    assert!(again.contains("0 already recorded, 2 to run"), "{again}");
+}

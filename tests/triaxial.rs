@@ -37,6 +37,8 @@ fn run(
         material: file,
         settings: s,
         out: dir.join("out"),
+        jobs: 2,
+        resume: false,
         target_phi: None,
         tolerance_phi: 0.5,
     })

@@ -123,8 +123,10 @@ def _eta(s: float) -> str:
 
 
 class _Progress:
-    def __init__(self, total: int, slots: int, quiet: bool) -> None:
+    def __init__(self, total: int, slots: int, quiet: bool, what: str = "sweep", labels=None) -> None:
         self.total, self.slots, self.quiet = total, max(slots, 1), quiet
+        # ``labels``: run index -> what a line calls it (default ``point N``).
+        self.what, self.labels = what, labels or {}
         self.ok = self.failed = 0
         self.t0 = time.monotonic()
 
@@ -139,20 +141,26 @@ class _Progress:
         left = self.total - n
         eta = (time.monotonic() - self.t0) / max(n, 1) * left / self.slots if left else 0.0
         what = "ok" if rec["status"] == "ok" else f"FAILED: {rec.get('error', '')}"
+        point = rec["point"]
+        label = self.labels.get(point, f"point {point}")
         print(
-            f"sweep: point {rec['point']} ({rec['id']}) {what} in {rec['wall_s']:.1f} s; "
+            f"{self.what}: {label} ({rec['id']}) {what} in {rec['wall_s']:.1f} s; "
             f"{n}/{self.total} done, {running} running, {self.failed} failed, ETA {_eta(eta)}",
             file=sys.stderr,
             flush=True,
         )
 
 
-def _point_task(args: Tuple[Any, ...], rayon_threads: int) -> str:
-    # Each point's solver uses as many rayon threads as the task was given CPUs.
+def _native_task(name: str, args: Tuple[Any, ...], rayon_threads: int, cwd: str) -> str:
+    # Each run's solver uses as many rayon threads as the task was given CPUs.
     os.environ.setdefault("RAYON_NUM_THREADS", str(max(rayon_threads, 1)))
+    # Relative paths (scenes, case folders, outputs) mean what they meant to the driver, on
+    # its machine or on a cluster node that shares its file system.
+    if os.path.isdir(cwd):
+        os.chdir(cwd)
     from regolith import _regolith as native
 
-    return native.sweep_run_point(*args)
+    return getattr(native, name)(*args)
 
 
 def run(
@@ -216,36 +224,45 @@ def run(
             flush=True,
         )
     progress = _Progress(len(pending), slots, quiet)
-    if pending:
+
+    def record(line: str, running: int) -> None:
+        _regolith.sweep_append(out, line, shard)
+        progress.done(json.loads(line), running)
+
+    calls = [("sweep_run_point", (*common, p, out)) for p in pending]
+    if calls:
         if runner == "ray":
-            _run_ray(common, pending, out, shard, address, num_cpus, num_gpus, progress)
+            _schedule_ray(calls, record, address, num_cpus, num_gpus)
         else:
-            _run_threads(common, pending, out, shard, jobs, progress)
+            _schedule_threads(calls, record, jobs)
     if shard is None:
         _regolith.sweep_write_csv(out)
     return records(out)
 
 
-def _run_threads(common, pending, out, shard, jobs, progress) -> None:
+def _schedule_threads(calls, record, jobs: int) -> None:
+    """Runs each ``(native function name, args)`` call on ``jobs`` threads (the native calls
+    release the GIL), handing each returned record line to ``record(line, still_running)``."""
     from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
     with ThreadPoolExecutor(max_workers=jobs) as ex:
-        futs = {ex.submit(_regolith.sweep_run_point, *common, p, out) for p in pending}
+        futs = {ex.submit(getattr(_regolith, name), *args) for name, args in calls}
         while futs:
             finished, futs = wait(futs, return_when=FIRST_COMPLETED)
             for f in finished:
-                line = f.result()
-                _regolith.sweep_append(out, line, shard)
-                progress.done(json.loads(line), len(futs))
+                record(f.result(), len(futs))
 
 
-def _run_ray(common, pending, out, shard, address, num_cpus, num_gpus, progress) -> None:
+def _schedule_ray(calls, record, address, num_cpus, num_gpus) -> None:
+    """Runs each ``(native function name, args)`` call as one Ray task with ``num_cpus`` /
+    ``num_gpus``, on a new local instance or the cluster at ``address``, handing each returned
+    record line to ``record(line, still_running)`` as it finishes."""
     try:
         import ray
     except ImportError as e:
         raise InputError(f"runner='ray' needs Ray ({e}); install it (pip install ray) or use runner='threads'") from None
     # A process started with SIGINT ignored (nohup, a background job of a script) keeps
-    # ignoring it; otherwise Ctrl-C must stop the sweep (see below).
+    # ignoring it; otherwise Ctrl-C must stop the runs (see below).
     sigint_ignored = signal.getsignal(signal.SIGINT) == signal.SIG_IGN
     started = not ray.is_initialized()
     if started:
@@ -253,24 +270,23 @@ def _run_ray(common, pending, out, shard, address, num_cpus, num_gpus, progress)
             ray.init(include_dashboard=False, log_to_driver=False)
         else:
             ray.init(address=address, log_to_driver=False)
-    # Ctrl-C / SIGINT must stop the sweep at once: Ray may replace the SIGINT handler when it
-    # starts, and a ray.wait without a timeout blocks in C++ where no Python handler runs.
-    # So the default handler (KeyboardInterrupt) goes back in, the wait polls, and the points
-    # still running are cancelled on the way out (their records are simply not written).
+    # Ctrl-C / SIGINT must stop at once: Ray may replace the SIGINT handler when it starts,
+    # and a ray.wait without a timeout blocks in C++ where no Python handler runs. So the
+    # default handler (KeyboardInterrupt) goes back in, the wait polls, and the tasks still
+    # running are cancelled on the way out (their records are simply not written).
     previous = None
     if not sigint_ignored and threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     refs: List[Any] = []
     try:
-        task = ray.remote(num_cpus=num_cpus, num_gpus=num_gpus, max_retries=0)(_point_task)
+        task = ray.remote(num_cpus=num_cpus, num_gpus=num_gpus, max_retries=0)(_native_task)
         threads = max(1, int(num_cpus))
-        refs = [task.remote((*common, p, out), threads) for p in pending]
+        cwd = os.getcwd()
+        refs = [task.remote(name, args, threads, cwd) for name, args in calls]
         while refs:
             finished, refs = ray.wait(refs, num_returns=1, timeout=0.2)
             for r in finished:
-                line = ray.get(r)
-                _regolith.sweep_append(out, line, shard)
-                progress.done(json.loads(line), len(refs))
+                record(ray.get(r), len(refs))
     except KeyboardInterrupt:
         for r in refs:
             ray.cancel(r, force=True)

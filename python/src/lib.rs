@@ -368,7 +368,10 @@ impl Simulation {
     /// The soil particles in the domain as numpy arrays in the run's precision: `x`, `v`
     /// (n × 3, m and m/s), `p`, `q` (Pa), `stress` (n × 6: xx, yy, zz, xy, xz, yz, Pa, tension
     /// positive), `p_c` (Pa), `specific_volume`, `density` (kg/m³), `material` and `id`
-    /// (uint32). One copy of the solver's arrays, handed to numpy without a second.
+    /// (uint32). One copy of the solver's arrays, handed to numpy without a second. Not a
+    /// zero-copy view on purpose: the solver reorders its particle arrays when it sorts them
+    /// into cells and rewrites them while stepping with the GIL released, so a view would
+    /// change, or tear, under the reader; `id` follows a particle from one call to the next.
     fn particles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         match &*self.lock(py)? {
             Any::F32(s) => particles_of(py, s),
@@ -749,6 +752,54 @@ fn slurm_shard() -> PyResult<Option<String>> {
         .map(|s| format!("{}/{}", s.index, s.count)))
 }
 
+/// A batch failure as a Python exception: a wrong input is `InputError`, anything else
+/// (a case failing its bounds, a run not carried out) `RunError`; one line either way.
+fn batch_err(f: regolith::cli::Failure) -> PyErr {
+    let line = regolith::cli::batch::failure_line(&f);
+    match f {
+        regolith::cli::Failure::Input(_) => InputError::new_err(line),
+        _ => RunError::new_err(line),
+    }
+}
+
+/// The runs of a batch named by its command line (`["study", "stability", ...]` or
+/// `["calibrate", "triaxial", ...]`, as after `regolith`), as JSON: `what`, `out` and `runs`
+/// (`index`, `id`, `label`).
+#[pyfunction]
+fn batch_runs_json(args: Vec<String>) -> PyResult<String> {
+    let b = regolith::cli::batch::open(&args).map_err(batch_err)?;
+    let runs: Vec<serde_json::Value> = b
+        .runs()
+        .into_iter()
+        .map(|(index, id, label)| serde_json::json!({ "index": index, "id": id, "label": label }))
+        .collect();
+    let doc = serde_json::json!({ "what": b.what(), "out": b.out().display().to_string(), "runs": runs });
+    Ok(doc.to_string())
+}
+
+/// The indices of the batch's runs to do: all (its records forgotten first) unless `resume`.
+#[pyfunction]
+fn batch_pending(args: Vec<String>, resume: bool, retry_failed: bool) -> PyResult<Vec<usize>> {
+    let b = regolith::cli::batch::open(&args).map_err(batch_err)?;
+    b.pending(resume, retry_failed).map_err(batch_err)
+}
+
+/// Runs run `index` of the batch (the GIL released) and returns its record as a JSON line.
+#[pyfunction]
+fn batch_run(py: Python<'_>, args: Vec<String>, index: usize) -> PyResult<String> {
+    let b = regolith::cli::batch::open(&args).map_err(batch_err)?;
+    let rec = py.detach(|| b.run(index)).map_err(batch_err)?;
+    serde_json::to_string(&rec).map_err(|e| RunError::new_err(e.to_string()))
+}
+
+/// Writes the batch's tables from its records and returns the text the CLI prints; raises
+/// `RunError` when a case fails its bounds or a run was not carried out.
+#[pyfunction]
+fn batch_finish(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
+    let b = regolith::cli::batch::open(&args).map_err(batch_err)?;
+    py.detach(|| b.finish()).map_err(batch_err)
+}
+
 /// Regolith's version.
 #[pyfunction]
 fn version() -> &'static str {
@@ -780,6 +831,10 @@ fn _regolith(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sweep_merge, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_converge_json, m)?)?;
     m.add_function(wrap_pyfunction!(slurm_shard, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_runs_json, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_pending, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_run, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_finish, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     Ok(())
 }

@@ -7,7 +7,7 @@
 //! less its end-to-end straight line is extended at both ends by odd reflection and each pass
 //! starts from the steady state of its first sample, so a straight line passes unchanged.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// One section in transposed direct form II: `b` over `a` with `a0 = 1`.
 #[derive(Clone, Copy, Debug)]
@@ -114,7 +114,7 @@ impl Butterworth {
 }
 
 /// How a test's failure point was found.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FailureKind {
     /// The first local maximum of the filtered vertical stress (AGX's rule).
@@ -125,7 +125,7 @@ pub enum FailureKind {
 }
 
 /// A picked failure point.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Failure {
     /// How it was found.
     pub kind: FailureKind,

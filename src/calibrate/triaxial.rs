@@ -26,8 +26,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::CommandError;
 use super::fit::{MohrCoulomb, mohr_coulomb, mohr_coulomb_cohesionless};
@@ -39,6 +38,7 @@ use crate::output::plot::{Figure, Panel, Series};
 use crate::output::write_figure;
 use crate::scene::{Precision, load_scene};
 use crate::sim::Simulation;
+use crate::sweep::{Record, Task, fnv_id, forget, read_all, run_tasks};
 use regolith_fsi::Real;
 use regolith_fsi::config::WallContact;
 use regolith_fsi::math::Sym3;
@@ -285,7 +285,7 @@ pub struct Sample {
 }
 
 /// One test.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct TriaxialTest {
     /// Confining stress asked for (Pa).
     pub confining: f64,
@@ -619,6 +619,11 @@ pub struct TriaxialInputs {
     pub settings: TriaxialSettings,
     /// Output folder.
     pub out: PathBuf,
+    /// Tests run at once (threads of this process).
+    pub jobs: usize,
+    /// Keep the tests already recorded (same material, settings and confining stress) in the
+    /// output folder (per round of the φ loop) and run only the others.
+    pub resume: bool,
     /// Adjust the material's friction angle until the sample's measured φ is this (degrees).
     pub target_phi: Option<f64>,
     /// The loop accepts a φ within this many degrees of the target, or within its standard
@@ -702,31 +707,151 @@ fn number(m: &toml::Table, key: &str) -> Option<f64> {
     m.get(key).and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
 }
 
-/// Runs every test (in parallel), fits the envelope, writes everything.
+/// The tests of one envelope (one per confining stress), as tasks of the shared runner
+/// ([`crate::sweep::run_tasks`]): each records its [`TriaxialTest`] in the folder's
+/// `results.jsonl`, so a rerun with `resume` runs only the tests not yet recorded, and the
+/// Python package's Ray runner can schedule them one Ray task each.
+#[derive(Clone, Debug)]
+pub struct TriaxialPlan {
+    /// The folder: `test_NN/` per test, `results.jsonl`.
+    pub dir: PathBuf,
+    /// The tests, in the order of the confining stresses.
+    pub tests: Vec<TestTask>,
+}
+
+/// One test of a [`TriaxialPlan`].
+#[derive(Clone, Debug)]
+pub struct TestTask {
+    index: usize,
+    id: String,
+    /// Its confining stress (Pa).
+    pub confining: f64,
+    material: toml::Table,
+    settings: TriaxialSettings,
+}
+
+impl TriaxialPlan {
+    /// One test per confining stress of `s`, on `material`, in `dir`.
+    pub fn new(material: &toml::Table, s: &TriaxialSettings, dir: &Path) -> Result<Self, CommandError> {
+        let settings = serde_json::to_string(s).map_err(|e| CommandError::Run(format!("settings: {e}")))?;
+        let material_text = material.to_string();
+        let tests = s
+            .confining
+            .iter()
+            .enumerate()
+            .map(|(index, &confining)| TestTask {
+                index,
+                id: fnv_id(&[
+                    material_text.as_bytes(),
+                    settings.as_bytes(),
+                    &confining.to_bits().to_le_bytes(),
+                    env!("CARGO_PKG_VERSION").as_bytes(),
+                ]),
+                confining,
+                material: material.clone(),
+                settings: s.clone(),
+            })
+            .collect();
+        Ok(Self { dir: dir.to_path_buf(), tests })
+    }
+
+    /// Every test's recorded result, in order, and the envelope through them. A test that
+    /// failed or has no record is an error naming its confining stress.
+    pub fn finish(&self) -> Result<(Vec<TriaxialTest>, MohrCoulomb), CommandError> {
+        let records = read_all(&self.dir)?;
+        let mut tests = Vec::new();
+        let mut missing = Vec::new();
+        for t in &self.tests {
+            let why = match records.iter().find(|r| r.id == t.id) {
+                Some(r) if r.ok() => match r.summary.clone().map(serde_json::from_value::<TriaxialTest>) {
+                    Some(Ok(test)) => {
+                        tests.push(test);
+                        continue;
+                    }
+                    _ => "its record holds no result".to_string(),
+                },
+                Some(r) => r.error.clone().unwrap_or_else(|| "failed".into()),
+                None => "not run".into(),
+            };
+            missing.push(format!("σ3 = {:.4e} Pa: {why}", t.confining));
+        }
+        if !missing.is_empty() {
+            return Err(CommandError::Run(format!("triaxial tests not carried out: {}", missing.join("; "))));
+        }
+        let s3: Vec<f64> = tests.iter().map(|t| t.lateral_at_failure).collect();
+        let s1: Vec<f64> = tests.iter().map(|t| t.vertical_at_failure).collect();
+        let fit = mohr_coulomb(&s3, &s1).map_err(|e| {
+            CommandError::Run(format!("the failure stresses σ3 = {s3:?} Pa, σ1 = {s1:?} Pa give no envelope: {e}"))
+        })?;
+        Ok((tests, fit))
+    }
+}
+
+impl Task for TestTask {
+    fn index(&self) -> usize {
+        self.index
+    }
+    fn id(&self) -> &str {
+        &self.id
+    }
+    fn label(&self) -> String {
+        format!("test {} (σ3 = {:.4e} Pa)", self.index + 1, self.confining)
+    }
+    fn run(&self, out: &Path, _alone: bool) -> Record {
+        let start = Instant::now();
+        let name = format!("test_{:02}", self.index + 1);
+        let mut rec = Record {
+            point: self.index,
+            id: self.id.clone(),
+            status: "failed".into(),
+            overrides: [("confining".to_string(), serde_json::json!(self.confining))].into_iter().collect(),
+            wall_s: 0.0,
+            peak_mem_bytes: None,
+            error: None,
+            out: name.clone(),
+            summary: None,
+        };
+        match run_test(&self.material, &self.settings, self.confining, &out.join(&name)) {
+            Ok(t) => {
+                eprintln!(
+                    "  σ3 = {:.4e} Pa: failure ({:?}) at σ1 = {:.4e} Pa, σ3 = {:.4e} Pa, axial strain {:.4} ({:.1} s)",
+                    self.confining,
+                    t.failure.kind,
+                    t.vertical_at_failure,
+                    t.lateral_at_failure,
+                    t.strain_at_failure,
+                    t.wall_time_s
+                );
+                match serde_json::to_value(&t) {
+                    Ok(v) => {
+                        rec.status = "ok".into();
+                        rec.summary = Some(v);
+                    }
+                    Err(e) => rec.error = Some(format!("its result does not serialise: {e}")),
+                }
+            }
+            Err(e) => rec.error = Some(crate::error::report(&e)),
+        }
+        rec.wall_s = start.elapsed().as_secs_f64();
+        rec
+    }
+}
+
+/// Runs the tests of one envelope (those not yet recorded, with `resume`) on `jobs` threads,
+/// and fits the envelope.
 fn run_all(
     material: &toml::Table,
     s: &TriaxialSettings,
     out: &Path,
+    jobs: usize,
+    resume: bool,
 ) -> Result<(Vec<TriaxialTest>, MohrCoulomb), CommandError> {
-    let tests: Vec<TriaxialTest> = s
-        .confining
-        .par_iter()
-        .enumerate()
-        .map(|(k, &sigma0)| {
-            let t = run_test(material, s, sigma0, &out.join(format!("test_{:02}", k + 1)))?;
-            eprintln!(
-                "  σ3 = {sigma0:.4e} Pa: failure ({:?}) at σ1 = {:.4e} Pa, σ3 = {:.4e} Pa, axial strain {:.4} ({:.1} s)",
-                t.failure.kind, t.vertical_at_failure, t.lateral_at_failure, t.strain_at_failure, t.wall_time_s
-            );
-            Ok(t)
-        })
-        .collect::<Result<_, CommandError>>()?;
-    let s3: Vec<f64> = tests.iter().map(|t| t.lateral_at_failure).collect();
-    let s1: Vec<f64> = tests.iter().map(|t| t.vertical_at_failure).collect();
-    let fit = mohr_coulomb(&s3, &s1).map_err(|e| {
-        CommandError::Run(format!("the failure stresses σ3 = {s3:?} Pa, σ1 = {s1:?} Pa give no envelope: {e}"))
-    })?;
-    Ok((tests, fit))
+    let plan = TriaxialPlan::new(material, s, out)?;
+    if !resume {
+        forget(out)?;
+    }
+    run_tasks("triaxial", &plan.tests, out, None, jobs, true, true)?;
+    plan.finish()
 }
 
 /// Runs the tests, fits the envelope and writes `triaxial.json`, per test `test_NN/` with its
@@ -736,9 +861,12 @@ fn run_all(
 pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, CommandError> {
     let s = &inp.settings;
     s.check().map_err(|(flag, msg)| CommandError::Input(InputError::flag(flag, msg)))?;
+    if inp.jobs == 0 {
+        return Err(InputError::flag("--jobs", "0 tests at once runs nothing; allowed: 1 or more").into());
+    }
     let material = material_table(&inp.material)?;
     let Some(target) = inp.target_phi else {
-        let (tests, fit) = run_all(&material, s, &inp.out)?;
+        let (tests, fit) = run_all(&material, s, &inp.out, inp.jobs, inp.resume)?;
         return report(inp, &inp.out, &material, tests, fit, None, None);
     };
     if !(target.is_finite() && target > 0.0 && target < 90.0) {
@@ -770,7 +898,7 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
         let mut m = material.clone();
         m.insert("friction_angle".into(), phi.into());
         let dir = inp.out.join(format!("iteration_{k}"));
-        let (tests, fit) = run_all(&m, s, &dir)?;
+        let (tests, fit) = run_all(&m, s, &dir, inp.jobs, inp.resume)?;
         let se = fit.se_phi.unwrap_or(0.0);
         eprintln!("  friction_angle = {phi:.3}°: sample φ = {:.2}° ± {:.2}° (target {target}°)", fit.phi, se);
         let out = (fit.phi, se);
@@ -792,6 +920,15 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
         None => None,
     };
     report(inp, &dir, &m, tests, fit, Some(loop_run), written)
+}
+
+/// The envelope of tests already run and recorded in `inp.out` (by the Ray runner, say):
+/// fits it and writes `triaxial.json` and the Mohr-circle plot, as [`calibrate_triaxial`] does
+/// after running them. A test without a finished record is an error naming it.
+pub fn envelope_of_recorded(inp: &TriaxialInputs) -> Result<TriaxialReport, CommandError> {
+    let material = material_table(&inp.material)?;
+    let (tests, fit) = TriaxialPlan::new(&material, &inp.settings, &inp.out)?.finish()?;
+    report(inp, &inp.out, &material, tests, fit, None, None)
 }
 
 fn report(

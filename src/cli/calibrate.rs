@@ -4,11 +4,11 @@ use std::path::PathBuf;
 
 use super::Failure;
 use crate::calibrate::repose::{ReposeInputs, ReposeSettings, calibrate_repose};
-use crate::calibrate::triaxial::{TriaxialInputs, TriaxialSettings, calibrate_triaxial};
+use crate::calibrate::triaxial::{TriaxialInputs, TriaxialReport, calibrate_triaxial};
 use crate::calibrate::{CommandError, McCInputs, calibrate_envelope, calibrate_mcc};
 use crate::input::InputError;
 
-fn failure(e: CommandError) -> Failure {
+pub(super) fn failure(e: CommandError) -> Failure {
     match e {
         CommandError::Input(e) => Failure::Input(e),
         CommandError::Data { file, source } => Failure::Input(InputError::file(&file, source.to_string())),
@@ -120,17 +120,31 @@ pub(super) fn repose(
     Ok(())
 }
 
-pub(super) fn triaxial(
-    material: PathBuf,
-    settings: TriaxialSettings,
-    target_phi: Option<f64>,
-    tolerance_phi: f64,
-    out: PathBuf,
-) -> Result<(), Failure> {
-    let r = calibrate_triaxial(&TriaxialInputs { material, settings, out: out.clone(), target_phi, tolerance_phi })
-        .map_err(failure)?;
-    println!(
-        "triaxial envelope of {} tests: c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°{}",
+pub(super) fn triaxial(inp: TriaxialInputs) -> Result<(), Failure> {
+    let r = calibrate_triaxial(&inp).map_err(failure)?;
+    print!("{}", triaxial_text(&r));
+    if let Some(c) = &r.calibration {
+        match (c.converged, &r.calibrated_material) {
+            (Some(phi), Some(m)) => {
+                println!("calibrated: friction_angle = {phi:.3}° after {} rounds; material: {m}", c.iterates.len())
+            }
+            _ => {
+                return Err(Failure::Run(anyhow::anyhow!(
+                    "calibration did not converge: {} (rounds in {}, triaxial.json lists them)",
+                    c.failure.as_deref().unwrap_or("unknown"),
+                    inp.out.display()
+                )));
+            }
+        }
+    }
+    println!("outputs in {}", inp.out.display());
+    Ok(())
+}
+
+/// The envelope and every test, as printed.
+pub(super) fn triaxial_text(r: &TriaxialReport) -> String {
+    let mut t = format!(
+        "triaxial envelope of {} tests: c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°{}\n",
         r.tests.len(),
         r.c,
         se(r.standard_error_c),
@@ -141,40 +155,25 @@ pub(super) fn triaxial(
             _ => String::new(),
         }
     );
-    println!(
-        "  through the origin (c = 0, a critical state): φ = {:.3}° ± {}°",
+    t.push_str(&format!(
+        "  through the origin (c = 0, a critical state): φ = {:.3}° ± {}°\n",
         r.phi_cohesionless,
         se(r.standard_error_phi_cohesionless)
-    );
-    for t in &r.tests {
-        println!(
-            "  σ0 = {:.4e} Pa: {} particles, consolidated in {:.3} s, failure ({:?}) at axial strain {:.4}: σ1 = {:.4e} Pa, σ3 = {:.4e} Pa; inertial number {:.1e}; {} escaped; {:.1} s",
-            t.confining,
-            t.particles,
-            t.consolidation_time,
-            t.failure.kind,
-            t.strain_at_failure,
-            t.vertical_at_failure,
-            t.lateral_at_failure,
-            t.inertial_number,
-            t.escaped,
-            t.wall_time_s
-        );
+    ));
+    for x in &r.tests {
+        t.push_str(&format!(
+            "  σ0 = {:.4e} Pa: {} particles, consolidated in {:.3} s, failure ({:?}) at axial strain {:.4}: σ1 = {:.4e} Pa, σ3 = {:.4e} Pa; inertial number {:.1e}; {} escaped; {:.1} s\n",
+            x.confining,
+            x.particles,
+            x.consolidation_time,
+            x.failure.kind,
+            x.strain_at_failure,
+            x.vertical_at_failure,
+            x.lateral_at_failure,
+            x.inertial_number,
+            x.escaped,
+            x.wall_time_s
+        ));
     }
-    if let Some(c) = &r.calibration {
-        match (c.converged, &r.calibrated_material) {
-            (Some(phi), Some(m)) => {
-                println!("calibrated: friction_angle = {phi:.3}° after {} rounds; material: {m}", c.iterates.len())
-            }
-            _ => {
-                return Err(Failure::Run(anyhow::anyhow!(
-                    "calibration did not converge: {} (rounds in {}, triaxial.json lists them)",
-                    c.failure.as_deref().unwrap_or("unknown"),
-                    out.display()
-                )));
-            }
-        }
-    }
-    println!("outputs in {}", out.display());
-    Ok(())
+    t
 }

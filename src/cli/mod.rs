@@ -1,6 +1,7 @@
 //! Command-line commands. Each returns a [`Failure`]: an input error (exit code 2, one line
 //! naming the file or flag and what is allowed) or a run failure (exit code 1).
 
+pub mod batch;
 mod bench;
 mod calibrate;
 mod check;
@@ -15,7 +16,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::calibrate::repose::{ANGLE_TOLERANCE, ReposeSettings};
-use crate::calibrate::triaxial::{FailureRule, PHI_TOLERANCE, TriaxialSettings};
+use crate::calibrate::triaxial::PHI_TOLERANCE;
 use crate::input::InputError;
 
 /// Why a command failed.
@@ -130,20 +131,7 @@ pub enum SizeArg {
 pub enum StudyCommand {
     /// Run the hard cases and check each against its `[[expect]]` bounds; writes
     /// stability.md, stability.csv and stability.json (exit code 1 when a case fails).
-    Stability {
-        /// Cases to run (file stems, comma-separated; default: all).
-        #[arg(long, value_name = "NAME,...", value_delimiter = ',')]
-        cases: Vec<String>,
-        /// Problem size.
-        #[arg(long, value_enum, default_value_t = SizeArg::Ci)]
-        size: SizeArg,
-        /// Folder of case files.
-        #[arg(long, value_name = "DIR", default_value = "examples/hard")]
-        cases_dir: PathBuf,
-        /// Output folder.
-        #[arg(long, value_name = "DIR", default_value = "out/stability")]
-        out: PathBuf,
-    },
+    Stability(StabilityArgs),
     /// What accuracy costs in time: each case's d0 ladder and knobs, errors against closed
     /// forms, experiments or the ladder's Richardson limit; writes accuracy.csv, accuracy.json,
     /// accuracy.md and plots. Resumes: finished points are not run again.
@@ -263,53 +251,7 @@ pub enum CalibrateCommand {
     /// bottom plates; failure on the low-pass-filtered vertical stress; the Mohr–Coulomb
     /// envelope (c, φ with standard errors). Writes triaxial.json, per test series.csv and
     /// stress_strain plots, and the Mohr-circle plot.
-    Triaxial {
-        /// Material file (TOML).
-        #[arg(long, value_name = "FILE")]
-        material: PathBuf,
-        /// Confining stresses, one test each (Pa) [default: 5e3,10e3,...,50e3].
-        #[arg(long, value_name = "PA,...", value_delimiter = ',')]
-        confining: Vec<f64>,
-        /// Sample width along x and y (m).
-        #[arg(long, value_name = "M", default_value_t = 0.1)]
-        width: f64,
-        /// Sample height (m) [default: 2 × width].
-        #[arg(long, value_name = "M")]
-        height: Option<f64>,
-        /// Particle spacing d0 (m) [default: width / 10].
-        #[arg(long, value_name = "M")]
-        spacing: Option<f64>,
-        /// Axial strain rate of the shear phase (1/s).
-        #[arg(long, value_name = "1/S", default_value_t = 0.2)]
-        strain_rate: f64,
-        /// Axial strain at which the shear phase ends.
-        #[arg(long, value_name = "STRAIN", default_value_t = 0.1)]
-        max_strain: f64,
-        /// Failure: the first peak of the filtered vertical stress (AGX), or the critical-state
-        /// plateau (the mean over the last fifth) [default: plateau for MCC, else peak].
-        #[arg(long, value_enum)]
-        failure: Option<FailureArg>,
-        /// Order of the Butterworth filter.
-        #[arg(long, value_name = "N", default_value_t = 4)]
-        filter_order: usize,
-        /// Shortest wavelength the filter keeps (axial strain).
-        #[arg(long, value_name = "STRAIN", default_value_t = 0.01)]
-        filter_wavelength: f64,
-        /// Floating-point precision of the runs.
-        #[arg(long, value_enum, default_value = "f32")]
-        precision: Precision,
-        /// Adjust the material's friction angle until the sample's envelope has this φ
-        /// (degrees); writes material.toml when the loop converges.
-        #[arg(long, value_name = "DEG")]
-        target_phi: Option<f64>,
-        /// The loop accepts a φ within this many degrees of the target, or within its
-        /// standard error if that is larger.
-        #[arg(long, value_name = "DEG", default_value_t = PHI_TOLERANCE)]
-        tolerance: f64,
-        /// Output folder.
-        #[arg(long, value_name = "DIR", default_value = "out/calibrate-triaxial")]
-        out: PathBuf,
-    },
+    Triaxial(TriaxialArgs),
 }
 
 /// How a triaxial test's failure point is picked.
@@ -354,6 +296,105 @@ pub enum RunnerArg {
     Ray,
     /// --jobs points at a time on threads of this process.
     Threads,
+}
+
+/// `regolith calibrate triaxial ...`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TriaxialArgs {
+    /// Material file (TOML).
+    #[arg(long, value_name = "FILE")]
+    pub material: PathBuf,
+    /// Confining stresses, one test each (Pa) [default: 5e3,10e3,...,50e3].
+    #[arg(long, value_name = "PA,...", value_delimiter = ',')]
+    pub confining: Vec<f64>,
+    /// Sample width along x and y (m).
+    #[arg(long, value_name = "M", default_value_t = 0.1)]
+    pub width: f64,
+    /// Sample height (m) [default: 2 × width].
+    #[arg(long, value_name = "M")]
+    pub height: Option<f64>,
+    /// Particle spacing d0 (m) [default: width / 10].
+    #[arg(long, value_name = "M")]
+    pub spacing: Option<f64>,
+    /// Axial strain rate of the shear phase (1/s).
+    #[arg(long, value_name = "1/S", default_value_t = 0.2)]
+    pub strain_rate: f64,
+    /// Axial strain at which the shear phase ends.
+    #[arg(long, value_name = "STRAIN", default_value_t = 0.1)]
+    pub max_strain: f64,
+    /// Failure: the first peak of the filtered vertical stress (AGX), or the critical-state
+    /// plateau (the mean over the last fifth) [default: plateau for MCC, else peak].
+    #[arg(long, value_enum)]
+    pub failure: Option<FailureArg>,
+    /// Order of the Butterworth filter.
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub filter_order: usize,
+    /// Shortest wavelength the filter keeps (axial strain).
+    #[arg(long, value_name = "STRAIN", default_value_t = 0.01)]
+    pub filter_wavelength: f64,
+    /// Floating-point precision of the runs.
+    #[arg(long, value_enum, default_value = "f32")]
+    pub precision: Precision,
+    /// Adjust the material's friction angle until the sample's envelope has this φ
+    /// (degrees); writes material.toml when the loop converges.
+    #[arg(long, value_name = "DEG")]
+    pub target_phi: Option<f64>,
+    /// The loop accepts a φ within this many degrees of the target, or within its
+    /// standard error if that is larger.
+    #[arg(long, value_name = "DEG", default_value_t = PHI_TOLERANCE)]
+    pub tolerance: f64,
+    /// Output folder.
+    #[arg(long, value_name = "DIR", default_value = "out/calibrate-triaxial")]
+    pub out: PathBuf,
+    /// How the tests are scheduled (default --jobs: one per core).
+    #[command(flatten)]
+    pub runner: BatchRunArgs,
+}
+
+/// `regolith study stability ...`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct StabilityArgs {
+    /// Cases to run (file stems, comma-separated; default: all).
+    #[arg(long, value_name = "NAME,...", value_delimiter = ',')]
+    pub cases: Vec<String>,
+    /// Problem size.
+    #[arg(long, value_enum, default_value_t = SizeArg::Ci)]
+    pub size: SizeArg,
+    /// Folder of case files.
+    #[arg(long, value_name = "DIR", default_value = "examples/hard")]
+    pub cases_dir: PathBuf,
+    /// Output folder.
+    #[arg(long, value_name = "DIR", default_value = "out/stability")]
+    pub out: PathBuf,
+    /// How the cases are scheduled.
+    #[command(flatten)]
+    pub runner: BatchRunArgs,
+}
+
+/// How the runs of a study or a calibration are scheduled: threads of this process, or one Ray
+/// task each (the Python package's runner, on a local instance or a cluster). Either way each
+/// run's record goes to the output folder's `results.jsonl` as it finishes.
+#[derive(Debug, Clone, clap::Args)]
+pub struct BatchRunArgs {
+    /// Threads of this process, or one Ray task per run.
+    #[arg(long, value_enum, default_value_t = RunnerArg::Threads)]
+    pub runner: RunnerArg,
+    /// Runs at once (threads).
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Keep the runs already recorded in the output folder (same inputs, same version) and
+    /// run only the others; without it every run starts again.
+    #[arg(long)]
+    pub resume: bool,
+    /// Ray cluster to join (`auto`, `ray://host:10001`); default: start a local instance.
+    #[arg(long, value_name = "ADDRESS")]
+    pub address: Option<String>,
+    /// CPUs per run (Ray).
+    #[arg(long, value_name = "N")]
+    pub num_cpus: Option<f64>,
+    /// GPUs per run (Ray).
+    #[arg(long, value_name = "N")]
+    pub num_gpus: Option<f64>,
 }
 
 /// How a sweep combines its varied keys.
@@ -670,56 +711,19 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             };
             calibrate::repose(material, s, target_angle, tolerance, out)
         }
-        Command::Calibrate {
-            calibrate:
-                CalibrateCommand::Triaxial {
-                    material,
-                    confining,
-                    width,
-                    height,
-                    spacing,
-                    strain_rate,
-                    max_strain,
-                    failure,
-                    filter_order,
-                    filter_wavelength,
-                    precision,
-                    target_phi,
-                    tolerance,
-                    out,
-                },
-        } => {
-            let mut s = TriaxialSettings::for_width(width);
-            if let Some(h) = height {
-                s.height = h;
+        Command::Calibrate { calibrate: CalibrateCommand::Triaxial(a) } => {
+            if a.runner.runner == RunnerArg::Ray {
+                return batch::ray(&a.runner, "calibrate triaxial");
             }
-            if let Some(d) = spacing {
-                s.spacing = d;
-            }
-            if !confining.is_empty() {
-                s.confining = confining;
-            }
-            s.strain_rate = strain_rate;
-            s.max_strain = max_strain;
-            s.failure = match failure {
-                Some(FailureArg::Peak) => FailureRule::Peak,
-                Some(FailureArg::Plateau) => FailureRule::Plateau,
-                None => crate::calibrate::triaxial::default_rule(&material).map_err(Failure::Input)?,
-            };
-            s.filter_order = filter_order;
-            s.filter_wavelength = filter_wavelength;
-            s.precision = match precision {
-                Precision::F32 => crate::scene::Precision::F32,
-                Precision::F64 => crate::scene::Precision::F64,
-            };
-            calibrate::triaxial(material, s, target_phi, tolerance, out)
+            batch::threads_only(&a.runner)?;
+            calibrate::triaxial(a.inputs()?)
         }
-        Command::Study { study: StudyCommand::Stability { cases, size, cases_dir, out } } => {
-            let size = match size {
-                SizeArg::Ci => "ci",
-                SizeArg::Full => "full",
-            };
-            study::stability_cmd(cases_dir, cases, size.into(), out)
+        Command::Study { study: StudyCommand::Stability(a) } => {
+            if a.runner.runner == RunnerArg::Ray {
+                return batch::ray(&a.runner, "study stability");
+            }
+            batch::threads_only(&a.runner)?;
+            study::stability_cmd(&a.options())
         }
         Command::Study { study: StudyCommand::Accuracy { cases, budget, jobs, cases_dir, out } } => {
             let budget = match budget {

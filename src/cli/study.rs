@@ -1,19 +1,33 @@
 //! `regolith study stability` and `regolith study accuracy`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::anyhow;
 
 use super::Failure;
 use crate::study::StudyError;
-use crate::study::stability::{StabilityOptions, stability};
+use crate::study::stability::{CaseResult, StabilityOptions, stability};
 
-pub(super) fn stability_cmd(cases_dir: PathBuf, cases: Vec<String>, size: String, out: PathBuf) -> Result<(), Failure> {
-    let opts = StabilityOptions { cases_dir, cases, size, out: out.clone(), quiet: false };
-    let results = stability(&opts).map_err(|e| match e {
+pub(super) fn stability_cmd(opts: &StabilityOptions) -> Result<(), Failure> {
+    let results = stability(opts).map_err(study_failure)?;
+    let (text, failed) = stability_verdict(&results, &opts.out);
+    println!("{text}");
+    match failed {
+        None => Ok(()),
+        Some(f) => Err(Failure::Run(anyhow!("{f}"))),
+    }
+}
+
+/// A study error as the CLI reports it.
+pub(super) fn study_failure(e: StudyError) -> Failure {
+    match e {
         StudyError::Input(e) => Failure::Input(e),
         e => Failure::Run(anyhow::Error::new(e)),
-    })?;
+    }
+}
+
+/// The suite's verdict line, and the failure when a case fails its bounds.
+pub(super) fn stability_verdict(results: &[CaseResult], out: &Path) -> (String, Option<String>) {
     let failed: Vec<&str> = results.iter().filter(|r| !r.pass).map(|r| r.case.as_str()).collect();
     let wall: f64 = results.iter().map(|r| r.wall_s).sum();
     let known: Vec<&str> =
@@ -23,17 +37,14 @@ pub(super) fn stability_cmd(cases_dir: PathBuf, cases: Vec<String>, size: String
     } else {
         format!(", {} fail as known ({})", known.len(), known.join(", "))
     };
-    println!(
+    let text = format!(
         "{} of {} cases pass{known_text}, in {wall:.1} s; table in {}",
         results.len() - failed.len() - known.len(),
         results.len(),
         out.join("stability.md").display()
     );
-    if failed.is_empty() {
-        Ok(())
-    } else {
-        Err(Failure::Run(anyhow!("cases failing their bounds: {}", failed.join(", "))))
-    }
+    let failure = (!failed.is_empty()).then(|| format!("cases failing their bounds: {}", failed.join(", ")));
+    (text, failure)
 }
 
 pub(super) fn accuracy_cmd(
@@ -44,10 +55,7 @@ pub(super) fn accuracy_cmd(
     out: PathBuf,
 ) -> Result<(), Failure> {
     let opts = crate::accuracy::AccuracyOptions { cases_dir, cases, budget, jobs, out: out.clone(), quiet: false };
-    let a = crate::accuracy::accuracy(&opts).map_err(|e| match e {
-        StudyError::Input(e) => Failure::Input(e),
-        e => Failure::Run(anyhow::Error::new(e)),
-    })?;
+    let a = crate::accuracy::accuracy(&opts).map_err(study_failure)?;
     let mut failed = Vec::new();
     for c in &a.cases {
         let n_failed = c.rows.iter().filter(|r| r.failure.is_some()).count();

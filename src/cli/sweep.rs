@@ -108,16 +108,7 @@ pub(super) fn run(a: SweepArgs) -> Result<(), Failure> {
             Ok(())
         }
         RunnerArg::Ray => {
-            if a.jobs.is_some() {
-                return Err(
-                    InputError::flag("--jobs", "applies to --runner threads only (Ray takes --num-cpus)").into()
-                );
-            }
-            for (flag, v) in [("--num-cpus", a.num_cpus), ("--num-gpus", a.num_gpus)] {
-                if v.is_some_and(|x| !(x.is_finite() && x >= 0.0) || (flag == "--num-cpus" && x == 0.0)) {
-                    return Err(InputError::flag(flag, "must be a number > 0 (--num-gpus: >= 0)").into());
-                }
-            }
+            super::batch::check_ray_flags(a.jobs, a.num_cpus, a.num_gpus)?;
             ray(&a, shard)
         }
     }

@@ -30,6 +30,9 @@ pub enum StudyError {
         #[source]
         source: RunError,
     },
+    /// Cases or points that could not be carried out, each with its one-line error.
+    #[error("not carried out: {0}")]
+    Incomplete(String),
     /// Writing a table failed.
     #[error("writing {}", path.display())]
     Output {

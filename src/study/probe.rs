@@ -31,7 +31,7 @@ struct RunFigures {
 }
 
 /// Where and when the soil was fastest: what a failed speed bound needs to be traced.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Fastest {
     /// Its speed (m/s).
     pub speed: f64,

@@ -5,19 +5,25 @@
 //! always shows: it ends without a solver failure or runaway (unless the case injects one on
 //! purpose, `reported_failure`), and mass is conserved (every particle is still there,
 //! in the domain or counted as escaped, with its mass unchanged).
+//!
+//! The cases are tasks of the shared runner ([`crate::sweep::run_tasks`]): `--jobs` of them at
+//! once, one record each in the output folder's `results.jsonl` (the case's [`CaseResult`] as
+//! its summary), so that `--resume` runs only the cases not yet recorded, and the Python
+//! package's Ray runner can schedule them one Ray task each ([`StabilityPlan`]).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use super::expect::{Expectation, Metric, read_case};
+use super::expect::{CaseSpec, Expectation, Metric, read_case};
 use super::probe::{Figures, Probe};
 use super::{StudyError, write_text};
 use crate::driver::RunError;
 use crate::input::{InputError, read_text};
 use crate::run::{RunOptions, run_scene_observed};
 use crate::scene::{Scene, load_scene};
+use crate::sweep::{Record, Task, fnv_id, forget, read_all, run_tasks, toml_to_json};
 
 /// What to run.
 #[derive(Clone, Debug)]
@@ -32,10 +38,15 @@ pub struct StabilityOptions {
     pub out: PathBuf,
     /// No line per case on stderr.
     pub quiet: bool,
+    /// Cases run at once (threads of this process).
+    pub jobs: usize,
+    /// Keep the cases already recorded in `out` (same case file, size and version) instead of
+    /// running every case again.
+    pub resume: bool,
 }
 
 /// One check's outcome.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CheckResult {
     /// The metric (or `finite`, `mass` for the checks every run gets).
     pub check: String,
@@ -54,7 +65,7 @@ pub struct CheckResult {
 }
 
 /// One case's outcome.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CaseResult {
     /// File stem.
     pub case: String,
@@ -99,62 +110,179 @@ pub fn case_files(dir: &Path) -> Result<Vec<(String, PathBuf)>, InputError> {
     Ok(out)
 }
 
-/// Runs the cases and writes `stability.md`, `stability.csv` and `stability.json` to
-/// `opts.out`. A case that fails its bounds is reported, not an error.
-pub fn stability(opts: &StabilityOptions) -> Result<Vec<CaseResult>, StudyError> {
-    if !super::expect::SIZES.contains(&opts.size.as_str()) {
-        return Err(InputError::flag("--size", format!("\"{}\" is not a size; allowed: ci, full", opts.size)).into());
-    }
-    let all = case_files(&opts.cases_dir)?;
-    for c in &opts.cases {
-        if !all.iter().any(|(n, _)| n == c) {
-            let names: Vec<&str> = all.iter().map(|(n, _)| n.as_str()).collect();
-            return Err(InputError::flag("--cases", format!("no case \"{c}\"; cases: {}", names.join(", "))).into());
-        }
-    }
-    // Read every chosen case first: a wrong file is an input error before anything runs.
-    let mut chosen = Vec::new();
-    for (name, path) in all {
-        if opts.cases.is_empty() || opts.cases.contains(&name) {
-            let text = read_text(&path)?;
-            let spec = read_case(&path, &text)?;
-            chosen.push((name, path, spec));
-        }
-    }
-    std::fs::create_dir_all(&opts.out).map_err(|e| StudyError::output(&opts.out, e))?;
-    let mut results = Vec::new();
-    for (name, path, spec) in chosen {
-        let sets = spec.sizes.get(&opts.size).cloned().unwrap_or_default();
-        let mut r = run_case(&name, &path, &opts.size, &sets, &spec.expect, &opts.out.join(&name))?;
-        if let Some(why) = &spec.known_failure {
-            // Strict: a known failure that passes means the defect is gone; the mark must go too.
-            if r.pass {
-                r.ended = Some(format!("marked known_failure but passed: remove the mark ({why})"));
-            }
-            r.pass = !r.pass;
-            r.known_failure = Some(why.clone());
-        }
-        if !opts.quiet {
-            eprintln!(
-                "{:<32} {:<4} {:>7.1} s  {}",
-                r.case,
-                match (r.pass, r.known_failure.is_some()) {
-                    (true, false) => "pass",
-                    (true, true) => "KNOWN",
-                    (false, _) => "FAIL",
-                },
-                r.wall_s,
-                r.checks
-                    .iter()
-                    .map(|c| format!("{} {} ({})", c.check, fmt_value(c.measured), c.bound))
-                    .collect::<Vec<_>>()
-                    .join("; ")
+/// The chosen cases, read and checked, as tasks of the shared runner.
+#[derive(Debug)]
+pub struct StabilityPlan {
+    /// Size run.
+    pub size: String,
+    /// Output folder.
+    pub out: PathBuf,
+    /// The cases, in file-name order.
+    pub cases: Vec<CaseTask>,
+}
+
+/// One case of a [`StabilityPlan`].
+#[derive(Debug)]
+pub struct CaseTask {
+    index: usize,
+    id: String,
+    /// File stem.
+    pub name: String,
+    path: PathBuf,
+    spec: CaseSpec,
+    size: String,
+    quiet: bool,
+}
+
+impl StabilityPlan {
+    /// Reads every chosen case (a wrong file or flag is an input error before anything runs).
+    pub fn new(opts: &StabilityOptions) -> Result<Self, StudyError> {
+        if !super::expect::SIZES.contains(&opts.size.as_str()) {
+            return Err(
+                InputError::flag("--size", format!("\"{}\" is not a size; allowed: ci, full", opts.size)).into()
             );
         }
-        results.push(r);
+        if opts.jobs == 0 {
+            return Err(InputError::flag("--jobs", "0 cases at once runs nothing; allowed: 1 or more").into());
+        }
+        let all = case_files(&opts.cases_dir)?;
+        for c in &opts.cases {
+            if !all.iter().any(|(n, _)| n == c) {
+                let names: Vec<&str> = all.iter().map(|(n, _)| n.as_str()).collect();
+                return Err(InputError::flag("--cases", format!("no case \"{c}\"; cases: {}", names.join(", "))).into());
+            }
+        }
+        let mut cases = Vec::new();
+        for (name, path) in all {
+            if opts.cases.is_empty() || opts.cases.contains(&name) {
+                let text = read_text(&path)?;
+                let spec = read_case(&path, &text)?;
+                // The same case file at the same size with the same version is the same run.
+                let id = fnv_id(&[text.as_bytes(), opts.size.as_bytes(), env!("CARGO_PKG_VERSION").as_bytes()]);
+                cases.push(CaseTask {
+                    index: cases.len(),
+                    id,
+                    name,
+                    path,
+                    spec,
+                    size: opts.size.clone(),
+                    quiet: opts.quiet,
+                });
+            }
+        }
+        Ok(Self { size: opts.size.clone(), out: opts.out.clone(), cases })
     }
-    write_tables(&results, &opts.out)?;
-    Ok(results)
+
+    /// Forgets the cases recorded in the output folder (a run without `--resume`).
+    pub fn forget(&self) -> Result<(), StudyError> {
+        Ok(forget(&self.out)?)
+    }
+
+    /// The recorded outcome of every case, in order, once all have run: writes
+    /// `stability.md`, `.csv` and `.json`. A case that could not be carried out (its record
+    /// failed, or it has none) is an error naming it, after the table of the others is written.
+    pub fn finish(&self) -> Result<Vec<CaseResult>, StudyError> {
+        let records: Vec<Record> = read_all(&self.out)?;
+        let mut results = Vec::new();
+        let mut missing = Vec::new();
+        for c in &self.cases {
+            match records.iter().find(|r| r.id == c.id) {
+                Some(r) if r.ok() => match r.summary.clone().map(serde_json::from_value::<CaseResult>) {
+                    Some(Ok(res)) => results.push(res),
+                    _ => missing.push(format!("{} (its record holds no result)", c.name)),
+                },
+                Some(r) => missing.push(format!("{} ({})", c.name, r.error.as_deref().unwrap_or("failed"))),
+                None => missing.push(format!("{} (not run)", c.name)),
+            }
+        }
+        write_tables(&results, &self.out)?;
+        if missing.is_empty() { Ok(results) } else { Err(StudyError::Incomplete(missing.join("; "))) }
+    }
+}
+
+impl Task for CaseTask {
+    fn index(&self) -> usize {
+        self.index
+    }
+    fn id(&self) -> &str {
+        &self.id
+    }
+    fn label(&self) -> String {
+        format!("case {}", self.name)
+    }
+    fn run(&self, out: &Path, _alone: bool) -> Record {
+        let start = Instant::now();
+        let sets = self.spec.sizes.get(&self.size).cloned().unwrap_or_default();
+        let mut rec = Record {
+            point: self.index,
+            id: self.id.clone(),
+            status: "failed".into(),
+            overrides: sets.iter().map(|(k, v)| (k.clone(), toml_to_json(v))).collect(),
+            wall_s: 0.0,
+            peak_mem_bytes: None,
+            error: None,
+            out: self.name.clone(),
+            summary: None,
+        };
+        match run_case(&self.name, &self.path, &self.size, &sets, &self.spec.expect, &out.join(&self.name)) {
+            Ok(mut r) => {
+                if let Some(why) = &self.spec.known_failure {
+                    // Strict: a known failure that passes means the defect is gone; the mark
+                    // must go too.
+                    if r.pass {
+                        r.ended = Some(format!("marked known_failure but passed: remove the mark ({why})"));
+                    }
+                    r.pass = !r.pass;
+                    r.known_failure = Some(why.clone());
+                }
+                if !self.quiet {
+                    eprintln!("{}", verdict_line(&r));
+                }
+                match serde_json::to_value(&r) {
+                    Ok(v) => {
+                        rec.status = "ok".into();
+                        rec.summary = Some(v);
+                    }
+                    Err(e) => rec.error = Some(format!("case {}: its result does not serialise: {e}", self.name)),
+                }
+            }
+            Err(e) => rec.error = Some(crate::error::report(&e)),
+        }
+        rec.wall_s = start.elapsed().as_secs_f64();
+        rec
+    }
+}
+
+/// A case's one-line verdict, as printed.
+fn verdict_line(r: &CaseResult) -> String {
+    format!(
+        "{:<32} {:<4} {:>7.1} s  {}",
+        r.case,
+        match (r.pass, r.known_failure.is_some()) {
+            (true, false) => "pass",
+            (true, true) => "KNOWN",
+            (false, _) => "FAIL",
+        },
+        r.wall_s,
+        r.checks
+            .iter()
+            .map(|c| format!("{} {} ({})", c.check, fmt_value(c.measured), c.bound))
+            .collect::<Vec<_>>()
+            .join("; ")
+    )
+}
+
+/// Runs the cases (those not yet recorded, with `resume`) and writes `stability.md`,
+/// `stability.csv` and `stability.json` to `opts.out`. A case that fails its bounds is
+/// reported, not an error; one that could not run is an error once the others have run.
+pub fn stability(opts: &StabilityOptions) -> Result<Vec<CaseResult>, StudyError> {
+    let plan = StabilityPlan::new(opts)?;
+    std::fs::create_dir_all(&opts.out).map_err(|e| StudyError::output(&opts.out, e))?;
+    if !opts.resume {
+        plan.forget()?;
+    }
+    run_tasks("stability", &plan.cases, &opts.out, None, opts.jobs, true, opts.quiet)?;
+    plan.finish()
 }
 
 fn run_case(

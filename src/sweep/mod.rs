@@ -12,16 +12,16 @@ mod converge;
 mod design;
 mod memory;
 mod results;
+mod task;
 
 pub use converge::{Ladder, converge, lookup};
 pub use design::{Design, Values, Vary, parse_vary, points};
 pub use memory::{peak_rss_bytes, reset_peak_rss};
 pub use results::{MAX_ARRAY_COLUMNS, Record, Shard, append, merge, read_all, results_file, write_csv};
+pub use task::{Outcome, Task, eta_text, fnv_id, forget, pending, run_tasks};
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use crate::input::{InputError, read_text};
@@ -165,17 +165,34 @@ impl Plan {
     /// The points of `shard` (all without one) that `done` does not hold: those without a
     /// record, and the failed ones when `retry_failed`.
     pub fn pending(&self, shard: Option<Shard>, done: &[Record], retry_failed: bool) -> Vec<Point> {
-        let finished: BTreeMap<&str, bool> = done.iter().map(|r| (r.id.as_str(), r.ok())).collect();
-        self.points
-            .iter()
-            .filter(|p| shard.is_none_or(|s| s.holds(p.index)))
-            .filter(|p| match finished.get(p.id.as_str()) {
-                Some(true) => false,
-                Some(false) => retry_failed,
-                None => true,
-            })
-            .cloned()
-            .collect()
+        let tasks = self.tasks();
+        pending(&tasks, shard, done, retry_failed).into_iter().map(|t| t.point.clone()).collect()
+    }
+
+    /// The points as tasks of the shared runner.
+    pub fn tasks(&self) -> Vec<PlanPoint<'_>> {
+        self.points.iter().map(|point| PlanPoint { plan: self, point }).collect()
+    }
+}
+
+/// A point of a plan, as the runner schedules it.
+pub struct PlanPoint<'a> {
+    plan: &'a Plan,
+    point: &'a Point,
+}
+
+impl Task for PlanPoint<'_> {
+    fn index(&self) -> usize {
+        self.point.index
+    }
+    fn id(&self) -> &str {
+        &self.point.id
+    }
+    fn label(&self) -> String {
+        format!("point {}", self.point.index)
+    }
+    fn run(&self, out: &Path, alone: bool) -> Record {
+        self.plan.run_point_measured(self.point, out, alone)
     }
 }
 
@@ -213,19 +230,6 @@ pub fn toml_to_json(v: &toml::Value) -> serde_json::Value {
     }
 }
 
-/// What a runner did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Outcome {
-    /// Points of this shard in the sweep.
-    pub points: usize,
-    /// Already recorded, so not run.
-    pub skipped: usize,
-    /// Run now and finished.
-    pub ok: usize,
-    /// Run now and failed.
-    pub failed: usize,
-}
-
 /// Runs a sweep's pending points on `jobs` threads of this process, appending each record as
 /// it finishes, then writes `results.csv` (unsharded runs; shards are joined by [`merge`]).
 /// Progress lines go to stderr unless `quiet`.
@@ -237,108 +241,11 @@ pub fn run_local(
     retry_failed: bool,
     quiet: bool,
 ) -> Result<Outcome, InputError> {
-    std::fs::create_dir_all(out).map_err(|e| InputError::file(out, format!("cannot create: {e}")))?;
-    let done = read_all(out)?;
-    let pending = plan.pending(shard, &done, retry_failed);
-    let points = plan.points.iter().filter(|p| shard.is_none_or(|s| s.holds(p.index))).count();
-    let mut outcome = Outcome { points, skipped: points - pending.len(), ..Outcome::default() };
-    if !quiet {
-        eprintln!(
-            "sweep: {} points{}, {} already recorded, {} to run on {} thread(s)",
-            points,
-            shard.map(|s| format!(" in shard {}/{}", s.index, s.count)).unwrap_or_default(),
-            outcome.skipped,
-            pending.len(),
-            jobs.max(1)
-        );
-    }
-    let file = results_file(out, shard);
-    let next = AtomicUsize::new(0);
-    let state = Mutex::new((Progress::new(pending.len(), jobs.max(1)), Ok::<(), InputError>(())));
-    std::thread::scope(|s| {
-        for _ in 0..jobs.max(1).min(pending.len().max(1)) {
-            s.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(p) = pending.get(i) else { break };
-                    if let Ok(mut g) = state.lock() {
-                        g.0.running += 1;
-                    }
-                    let rec = if jobs <= 1 { plan.run_point_alone(p, out) } else { plan.run_point(p, out) };
-                    let Ok(mut g) = state.lock() else { break };
-                    let written = append(&file, &rec);
-                    if let Err(e) = written {
-                        g.1 = Err(e);
-                    }
-                    g.0.finish(&rec);
-                    if !quiet {
-                        eprintln!("{}", g.0.line(&rec));
-                    }
-                }
-            });
-        }
-    });
-    let (progress, written) = state.into_inner().map_err(|_| InputError::file(&file, "a sweep thread panicked"))?;
-    written?;
-    outcome.ok = progress.ok;
-    outcome.failed = progress.failed;
+    let outcome = run_tasks("sweep", &plan.tasks(), out, shard, jobs, retry_failed, quiet)?;
     if shard.is_none() {
         write_csv(out, &read_all(out)?)?;
     }
     Ok(outcome)
-}
-
-/// Points done, running and failed, and the time left at the pace so far.
-struct Progress {
-    total: usize,
-    jobs: usize,
-    ok: usize,
-    failed: usize,
-    running: usize,
-    started: Instant,
-}
-
-impl Progress {
-    fn new(total: usize, jobs: usize) -> Self {
-        Self { total, jobs, ok: 0, failed: 0, running: 0, started: Instant::now() }
-    }
-
-    fn finish(&mut self, r: &Record) {
-        self.running = self.running.saturating_sub(1);
-        if r.ok() { self.ok += 1 } else { self.failed += 1 }
-    }
-
-    fn line(&self, r: &Record) -> String {
-        let done = self.ok + self.failed;
-        let left = self.total - done;
-        let eta = self.started.elapsed().as_secs_f64() / done.max(1) as f64 * left as f64 / self.jobs as f64;
-        let what = match &r.error {
-            None => "ok".to_string(),
-            Some(e) => format!("FAILED: {e}"),
-        };
-        format!(
-            "sweep: point {} ({}) {what} in {:.1} s; {done}/{} done, {} running, {} failed, ETA {}",
-            r.point,
-            r.id,
-            r.wall_s,
-            self.total,
-            self.running,
-            self.failed,
-            eta_text(if left == 0 { 0.0 } else { eta })
-        )
-    }
-}
-
-/// `1h 02m`, `3m 20s` or `12 s`.
-pub fn eta_text(s: f64) -> String {
-    let s = s.max(0.0).round() as u64;
-    if s >= 3600 {
-        format!("{}h {:02}m", s / 3600, (s % 3600) / 60)
-    } else if s >= 60 {
-        format!("{}m {:02}s", s / 60, s % 60)
-    } else {
-        format!("{s} s")
-    }
 }
 
 #[cfg(test)]
@@ -352,7 +259,5 @@ mod tests {
         assert_ne!(config_hash("x = 1", &o), config_hash("x = 2", &o));
         assert_ne!(config_hash("x = 1", &o), config_hash("x = 1", &[("a.b".into(), toml::Value::Float(0.25))]));
         assert_eq!(config_hash("", &[]), "cbf29ce484222325", "FNV-1a offset basis");
-        assert_eq!(eta_text(3725.0), "1h 02m");
-        assert_eq!(eta_text(200.0), "3m 20s");
     }
 }

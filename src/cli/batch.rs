@@ -1,0 +1,300 @@
+//! Studies and calibrations whose runs are independent (the stability suite's cases, a
+//! triaxial envelope's tests) run on threads of this process, or one Ray task each through the
+//! Python package's runner (`regolith.batch`). For the latter a batch is named by its command
+//! line: [`open`] parses it as the CLI does, and the Python side asks for the pending runs,
+//! runs each in a Ray task ([`Batch::run`], the same code the threads run) and appends its
+//! record, then lets [`Batch::finish`] write the tables from the records.
+
+use std::path::Path;
+
+use clap::Parser;
+
+use super::{BatchRunArgs, Cli, Command, Failure, FailureArg, Precision, StabilityArgs, TriaxialArgs};
+use crate::calibrate::triaxial::{
+    FailureRule, TriaxialInputs, TriaxialPlan, TriaxialSettings, default_rule, envelope_of_recorded,
+};
+use crate::input::InputError;
+use crate::study::stability::{StabilityOptions, StabilityPlan};
+use crate::sweep::{Record, Task, forget, pending, read_all};
+
+impl TriaxialArgs {
+    /// The calibration's inputs (the material is read for its default failure rule).
+    pub fn inputs(&self) -> Result<TriaxialInputs, Failure> {
+        let mut s = TriaxialSettings::for_width(self.width);
+        if let Some(h) = self.height {
+            s.height = h;
+        }
+        if let Some(d) = self.spacing {
+            s.spacing = d;
+        }
+        if !self.confining.is_empty() {
+            s.confining = self.confining.clone();
+        }
+        s.strain_rate = self.strain_rate;
+        s.max_strain = self.max_strain;
+        s.failure = match self.failure {
+            Some(FailureArg::Peak) => FailureRule::Peak,
+            Some(FailureArg::Plateau) => FailureRule::Plateau,
+            None => default_rule(&self.material)?,
+        };
+        s.filter_order = self.filter_order;
+        s.filter_wavelength = self.filter_wavelength;
+        s.precision = match self.precision {
+            Precision::F32 => crate::scene::Precision::F32,
+            Precision::F64 => crate::scene::Precision::F64,
+        };
+        Ok(TriaxialInputs {
+            material: self.material.clone(),
+            settings: s,
+            out: self.out.clone(),
+            jobs: self.runner.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+            resume: self.runner.resume,
+            target_phi: self.target_phi,
+            tolerance_phi: self.tolerance,
+        })
+    }
+}
+
+impl StabilityArgs {
+    /// The study's options.
+    pub fn options(&self) -> StabilityOptions {
+        StabilityOptions {
+            cases_dir: self.cases_dir.clone(),
+            cases: self.cases.clone(),
+            size: match self.size {
+                super::SizeArg::Ci => "ci".into(),
+                super::SizeArg::Full => "full".into(),
+            },
+            out: self.out.clone(),
+            quiet: false,
+            jobs: self.runner.jobs.unwrap_or(1),
+            resume: self.runner.resume,
+        }
+    }
+}
+
+/// Refuses the Ray flags on the threads runner.
+pub(super) fn threads_only(r: &BatchRunArgs) -> Result<(), Failure> {
+    for (flag, given) in
+        [("--address", r.address.is_some()), ("--num-cpus", r.num_cpus.is_some()), ("--num-gpus", r.num_gpus.is_some())]
+    {
+        if given {
+            return Err(InputError::flag(flag, "applies to --runner ray only").into());
+        }
+    }
+    if r.jobs == Some(0) {
+        return Err(InputError::flag("--jobs", "0 runs at once runs nothing; allowed: 1 or more").into());
+    }
+    Ok(())
+}
+
+/// Refuses `--jobs` on the Ray runner and CPU / GPU counts that are not numbers > 0 (≥ 0 GPUs).
+pub(super) fn check_ray_flags(
+    jobs: Option<usize>,
+    num_cpus: Option<f64>,
+    num_gpus: Option<f64>,
+) -> Result<(), Failure> {
+    if jobs.is_some() {
+        return Err(InputError::flag("--jobs", "applies to --runner threads only (Ray takes --num-cpus)").into());
+    }
+    for (flag, v) in [("--num-cpus", num_cpus), ("--num-gpus", num_gpus)] {
+        if v.is_some_and(|x| !(x.is_finite() && x >= 0.0) || (flag == "--num-cpus" && x == 0.0)) {
+            return Err(InputError::flag(flag, "must be a number > 0 (--num-gpus: >= 0)").into());
+        }
+    }
+    Ok(())
+}
+
+/// Hands the command (this process's own arguments) to the Python package's Ray runner
+/// (`regolith.batch`) and passes its exit code on.
+pub(super) fn ray(r: &BatchRunArgs, what: &str) -> Result<(), Failure> {
+    check_ray_flags(r.jobs, r.num_cpus, r.num_gpus)?;
+    let python = std::env::var(super::sweep::PYTHON_ENV).unwrap_or_else(|_| "python3".into());
+    let script = concat!(
+        "import sys\n",
+        "try:\n",
+        "    import regolith.batch as b\n",
+        "except ImportError as e:\n",
+        "    print('error: --runner ray: ' + str(e) + ' (install the Python package and Ray: pip install ./python ray; or pass --runner threads)', file=sys.stderr)\n",
+        "    sys.exit(2)\n",
+        "sys.exit(b.main(sys.argv[1:]))\n"
+    );
+    let status = std::process::Command::new(&python)
+        .arg("-c")
+        .arg(script)
+        .args(std::env::args().skip(1))
+        .status()
+        .map_err(|e| {
+            InputError::flag(
+                "--runner",
+                format!("ray: cannot start {python} ({e}); set {} to a Python with the regolith package and ray, or pass --runner threads", super::sweep::PYTHON_ENV),
+            )
+        })?;
+    match status.code() {
+        Some(0) => Ok(()),
+        Some(c @ (1 | 2)) => Err(Failure::Reported(c as u8)),
+        Some(130) => Err(Failure::Interrupted(format!(
+            "{what} interrupted; rerun it with --resume to run only what is not yet recorded"
+        ))),
+        _ => Err(Failure::Run(anyhow::anyhow!("the Ray runner ({python}, regolith.batch) failed: {status}"))),
+    }
+}
+
+/// A batch named by its command line.
+#[derive(Debug)]
+pub enum Batch {
+    /// `study stability ...`.
+    Stability(StabilityPlan),
+    /// `calibrate triaxial ...` (without `--target-phi`: its rounds depend on each other).
+    Triaxial(TriaxialInputs, TriaxialPlan),
+}
+
+/// A failure as one line.
+pub fn failure_line(f: &Failure) -> String {
+    match f {
+        Failure::Input(e) => e.to_string(),
+        Failure::Run(e) => format!("{e:#}"),
+        Failure::Interrupted(m) => m.clone(),
+        Failure::Reported(c) => format!("exit code {c}"),
+    }
+}
+
+/// Parses `args` (the command line after `regolith`) into a batch. Only the batch commands
+/// are accepted; the runner flags are left to the caller.
+pub fn open(args: &[String]) -> Result<Batch, Failure> {
+    let cli =
+        Cli::try_parse_from(std::iter::once("regolith".to_string()).chain(args.iter().cloned())).map_err(|e| {
+            let text = e.render().to_string();
+            let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments").trim().to_string();
+            Failure::Input(InputError::flag("arguments", first))
+        })?;
+    match cli.command {
+        Command::Study { study: super::StudyCommand::Stability(a) } => {
+            Ok(Batch::Stability(StabilityPlan::new(&a.options()).map_err(super::study::study_failure)?))
+        }
+        Command::Calibrate { calibrate: super::CalibrateCommand::Triaxial(a) } => {
+            if a.target_phi.is_some() {
+                return Err(InputError::flag(
+                    "--target-phi",
+                    "its rounds run one after another; use --runner threads (each round's tests still run in parallel)",
+                )
+                .into());
+            }
+            let inp = a.inputs()?;
+            inp.settings.check().map_err(|(flag, msg)| InputError::flag(flag, msg))?;
+            let material = crate::calibrate::repose::material_table(&inp.material)?;
+            let plan = TriaxialPlan::new(&material, &inp.settings, &inp.out).map_err(super::calibrate::failure)?;
+            Ok(Batch::Triaxial(inp, plan))
+        }
+        _ => Err(InputError::flag(
+            "arguments",
+            "not a batch command; allowed: `study stability ...`, `calibrate triaxial ...`",
+        )
+        .into()),
+    }
+}
+
+impl Batch {
+    /// What the progress lines call it.
+    pub fn what(&self) -> &'static str {
+        match self {
+            Self::Stability(_) => "stability",
+            Self::Triaxial(..) => "triaxial",
+        }
+    }
+
+    /// Its folder (records and outputs).
+    pub fn out(&self) -> &Path {
+        match self {
+            Self::Stability(p) => &p.out,
+            Self::Triaxial(_, p) => &p.dir,
+        }
+    }
+
+    fn tasks(&self) -> Vec<&dyn Task> {
+        match self {
+            Self::Stability(p) => p.cases.iter().map(|t| t as &dyn Task).collect(),
+            Self::Triaxial(_, p) => p.tests.iter().map(|t| t as &dyn Task).collect(),
+        }
+    }
+
+    /// Every run as `(index, id, label)`.
+    pub fn runs(&self) -> Vec<(usize, String, String)> {
+        self.tasks().iter().map(|t| (t.index(), t.id().to_string(), t.label())).collect()
+    }
+
+    /// The runs to do: all (the records are forgotten first) unless `resume`, then those not
+    /// recorded (and the failed ones when `retry_failed`).
+    pub fn pending(&self, resume: bool, retry_failed: bool) -> Result<Vec<usize>, Failure> {
+        std::fs::create_dir_all(self.out()).map_err(|e| InputError::file(self.out(), format!("cannot create: {e}")))?;
+        if !resume {
+            forget(self.out())?;
+        }
+        let done = read_all(self.out())?;
+        Ok(match self {
+            Self::Stability(p) => pending(&p.cases, None, &done, retry_failed).iter().map(|t| t.index()).collect(),
+            Self::Triaxial(_, p) => pending(&p.tests, None, &done, retry_failed).iter().map(|t| t.index()).collect(),
+        })
+    }
+
+    /// Runs run `index` (its record; the caller appends it to the results file).
+    pub fn run(&self, index: usize) -> Result<Record, Failure> {
+        let n = self.tasks().len();
+        let bad = || InputError::flag("index", format!("{index} is not a run of this batch (it has {n})"));
+        match self {
+            Self::Stability(p) => Ok(p.cases.get(index).ok_or_else(bad)?.run(&p.out, false)),
+            Self::Triaxial(_, p) => Ok(p.tests.get(index).ok_or_else(bad)?.run(&p.dir, false)),
+        }
+    }
+
+    /// Writes the tables from the records; returns the text the CLI prints, or the failure
+    /// (a case failing its bounds, a run not carried out).
+    pub fn finish(&self) -> Result<String, Failure> {
+        match self {
+            Self::Stability(p) => {
+                let results = p.finish().map_err(super::study::study_failure)?;
+                let (text, failed) = super::study::stability_verdict(&results, &p.out);
+                match failed {
+                    None => Ok(text),
+                    Some(f) => Err(Failure::Run(anyhow::anyhow!("{text}\n{f}"))),
+                }
+            }
+            Self::Triaxial(inp, _) => {
+                let r = envelope_of_recorded(inp).map_err(super::calibrate::failure)?;
+                Ok(format!("{}outputs in {}", super::calibrate::triaxial_text(&r), inp.out.display()))
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::RunnerArg;
+
+    #[test]
+    fn only_batch_commands_open_and_the_target_loop_is_refused() {
+        let args = |s: &str| s.split_whitespace().map(String::from).collect::<Vec<_>>();
+        let e = open(&args("run examples/scenes/plate.toml")).map(|_| ()).map_err(|f| failure_line(&f));
+        assert!(e.is_err_and(|m| m.contains("not a batch command")));
+        let e = open(&args("calibrate triaxial --material m.toml --target-phi 30"))
+            .map(|_| ())
+            .map_err(|f| failure_line(&f));
+        assert!(e.is_err_and(|m| m.contains("--target-phi")));
+        let e = open(&args("study stability --size huge")).map(|_| ()).map_err(|f| failure_line(&f));
+        assert!(e.is_err_and(|m| m.contains("huge")));
+    }
+
+    #[test]
+    fn the_runner_flags_of_the_other_runner_are_refused() {
+        let r = BatchRunArgs {
+            runner: RunnerArg::Threads,
+            jobs: None,
+            resume: false,
+            address: Some("auto".into()),
+            num_cpus: None,
+            num_gpus: None,
+        };
+        assert!(threads_only(&r).is_err_and(|f| failure_line(&f).contains("--address")));
+    }
+}
