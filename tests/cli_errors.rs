@@ -306,6 +306,15 @@ fn calibrate_triaxial_flags_and_materials_are_checked_before_running() {
         &["calibrate", "triaxial", "--material", "no/such/file.toml", "--out", &o],
         "no/such/file.toml",
     );
+    // calibrate plate: a scene without a plate rig, one size.
+    assert_one_line_error(
+        &["calibrate", "plate", "--scene", "examples/scenes/cone_penetrometer.toml", "--out", &o],
+        "calibrate plate needs a plate rig",
+    );
+    assert_one_line_error(
+        &["calibrate", "plate", "--scene", "examples/scenes/plate_sinkage.toml", "--sizes", "0.05", "--out", &o],
+        "--sizes: needs two or more different plate sizes",
+    );
     // The runner's flags: each belongs to one runner.
     assert_one_line_error(&["calibrate", "triaxial", "--material", sand, "--jobs", "0", "--out", &o], "--jobs");
     assert_one_line_error(

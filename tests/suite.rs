@@ -36,6 +36,8 @@ mod geostatic;
 mod interrupt;
 #[path = "material_errors.rs"]
 mod material_errors;
+#[path = "plate_calibration.rs"]
+mod plate_calibration;
 #[path = "rapier_plugin.rs"]
 mod rapier_plugin;
 #[path = "recording.rs"]

@@ -17,6 +17,7 @@
 pub mod fit;
 pub mod lowpass;
 pub mod mcc;
+pub mod plate;
 pub mod repose;
 pub mod target;
 pub mod triaxial;

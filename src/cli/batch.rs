@@ -9,7 +9,8 @@ use std::path::Path;
 
 use clap::Parser;
 
-use super::{BatchRunArgs, Cli, Command, Failure, FailureArg, Precision, StabilityArgs, TriaxialArgs};
+use super::{BatchRunArgs, Cli, Command, Failure, FailureArg, PlateArgs, Precision, StabilityArgs, TriaxialArgs};
+use crate::calibrate::plate::{PlateInputs, PlatePlan};
 use crate::calibrate::triaxial::{
     FailureRule, TriaxialInputs, TriaxialPlan, TriaxialSettings, default_rule, envelope_of_recorded,
 };
@@ -51,6 +52,25 @@ impl TriaxialArgs {
             resume: self.runner.resume,
             target_phi: self.target_phi,
             tolerance_phi: self.tolerance,
+        })
+    }
+}
+
+impl PlateArgs {
+    /// The calibration's inputs.
+    pub fn inputs(&self) -> Result<PlateInputs, Failure> {
+        let sets = self
+            .sets
+            .iter()
+            .map(|s| crate::scene::parse_set(s).map_err(|m| InputError::flag("--set", m)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(PlateInputs {
+            scene: self.scene.clone(),
+            sizes: self.sizes.clone(),
+            sets,
+            out: self.out.clone(),
+            jobs: self.runner.jobs.unwrap_or(1),
+            resume: self.runner.resume,
         })
     }
 }
@@ -147,6 +167,8 @@ pub enum Batch {
     Stability(StabilityPlan),
     /// `calibrate triaxial ...` (without `--target-phi`: its rounds depend on each other).
     Triaxial(TriaxialInputs, TriaxialPlan),
+    /// `calibrate plate ...`.
+    Plate(PlatePlan),
 }
 
 /// A failure as one line.
@@ -186,9 +208,12 @@ pub fn open(args: &[String]) -> Result<Batch, Failure> {
             let plan = TriaxialPlan::new(&material, &inp.settings, &inp.out).map_err(super::calibrate::failure)?;
             Ok(Batch::Triaxial(inp, plan))
         }
+        Command::Calibrate { calibrate: super::CalibrateCommand::Plate(a) } => {
+            Ok(Batch::Plate(PlatePlan::new(&a.inputs()?).map_err(super::calibrate::failure)?))
+        }
         _ => Err(InputError::flag(
             "arguments",
-            "not a batch command; allowed: `study stability ...`, `calibrate triaxial ...`",
+            "not a batch command; allowed: `study stability ...`, `calibrate triaxial ...`, `calibrate plate ...`",
         )
         .into()),
     }
@@ -200,6 +225,7 @@ impl Batch {
         match self {
             Self::Stability(_) => "stability",
             Self::Triaxial(..) => "triaxial",
+            Self::Plate(_) => "plate",
         }
     }
 
@@ -208,19 +234,25 @@ impl Batch {
         match self {
             Self::Stability(p) => &p.out,
             Self::Triaxial(_, p) => &p.dir,
+            Self::Plate(p) => &p.inputs.out,
         }
     }
 
-    fn tasks(&self) -> Vec<&dyn Task> {
+    /// Calls `f` with the batch's runs.
+    fn with_tasks<R>(&self, f: impl FnOnce(&[&dyn Task]) -> R) -> R {
         match self {
-            Self::Stability(p) => p.cases.iter().map(|t| t as &dyn Task).collect(),
-            Self::Triaxial(_, p) => p.tests.iter().map(|t| t as &dyn Task).collect(),
+            Self::Stability(p) => f(&p.cases.iter().map(|t| t as &dyn Task).collect::<Vec<_>>()),
+            Self::Triaxial(_, p) => f(&p.tests.iter().map(|t| t as &dyn Task).collect::<Vec<_>>()),
+            Self::Plate(p) => {
+                let points = p.plan.tasks();
+                f(&points.iter().map(|t| t as &dyn Task).collect::<Vec<_>>())
+            }
         }
     }
 
     /// Every run as `(index, id, label)`.
     pub fn runs(&self) -> Vec<(usize, String, String)> {
-        self.tasks().iter().map(|t| (t.index(), t.id().to_string(), t.label())).collect()
+        self.with_tasks(|ts| ts.iter().map(|t| (t.index(), t.id().to_string(), t.label())).collect())
     }
 
     /// The runs to do: all (the records are forgotten first) unless `resume`, then those not
@@ -231,20 +263,19 @@ impl Batch {
             forget(self.out())?;
         }
         let done = read_all(self.out())?;
-        Ok(match self {
-            Self::Stability(p) => pending(&p.cases, None, &done, retry_failed).iter().map(|t| t.index()).collect(),
-            Self::Triaxial(_, p) => pending(&p.tests, None, &done, retry_failed).iter().map(|t| t.index()).collect(),
-        })
+        Ok(self.with_tasks(|ts| pending(ts, None, &done, retry_failed).iter().map(|t| t.index()).collect()))
     }
 
     /// Runs run `index` (its record; the caller appends it to the results file).
     pub fn run(&self, index: usize) -> Result<Record, Failure> {
-        let n = self.tasks().len();
-        let bad = || InputError::flag("index", format!("{index} is not a run of this batch (it has {n})"));
-        match self {
-            Self::Stability(p) => Ok(p.cases.get(index).ok_or_else(bad)?.run(&p.out, false)),
-            Self::Triaxial(_, p) => Ok(p.tests.get(index).ok_or_else(bad)?.run(&p.dir, false)),
-        }
+        let out = self.out();
+        self.with_tasks(|ts| match ts.get(index) {
+            Some(t) => Ok(t.run(out, false)),
+            None => {
+                Err(InputError::flag("index", format!("{index} is not a run of this batch (it has {})", ts.len()))
+                    .into())
+            }
+        })
     }
 
     /// Writes the tables from the records; returns the text the CLI prints, or the failure
@@ -262,6 +293,10 @@ impl Batch {
             Self::Triaxial(inp, _) => {
                 let r = envelope_of_recorded(inp).map_err(super::calibrate::failure)?;
                 Ok(format!("{}outputs in {}", super::calibrate::triaxial_text(&r), inp.out.display()))
+            }
+            Self::Plate(p) => {
+                let r = p.finish().map_err(super::calibrate::failure)?;
+                Ok(format!("{}outputs in {}", super::calibrate::plate_text(&r), p.inputs.out.display()))
             }
         }
     }

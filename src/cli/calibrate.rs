@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use super::Failure;
+use crate::calibrate::plate::{PlateCalibration, PlateInputs, calibrate_plate};
 use crate::calibrate::repose::{ReposeInputs, ReposeSettings, calibrate_repose};
 use crate::calibrate::triaxial::{TriaxialInputs, TriaxialReport, calibrate_triaxial};
 use crate::calibrate::{CommandError, McCInputs, calibrate_envelope, calibrate_mcc};
@@ -139,6 +140,43 @@ pub(super) fn triaxial(inp: TriaxialInputs) -> Result<(), Failure> {
     }
     println!("outputs in {}", inp.out.display());
     Ok(())
+}
+
+pub(super) fn plate(inp: PlateInputs) -> Result<(), Failure> {
+    let r = calibrate_plate(&inp).map_err(failure)?;
+    print!("{}", plate_text(&r));
+    println!("outputs in {}", inp.out.display());
+    Ok(())
+}
+
+/// The Bekker fit and every plate, as printed.
+pub(super) fn plate_text(r: &PlateCalibration) -> String {
+    let b = &r.bekker;
+    let opt = |v: Option<f64>| v.map_or_else(|| "n/a".to_string(), |x| format!("{x:.4e}"));
+    let mut t = format!(
+        "Bekker fit of {} plates: k_c = {} ± {} N/m^(n+1), k_φ = {} ± {} N/m^(n+2), n = {:.4} ± {} (R² {:.4}, {} points)\n",
+        r.runs.len(),
+        opt(b.kc),
+        se(b.standard_error_kc),
+        opt(b.kphi),
+        se(b.standard_error_kphi),
+        b.n,
+        se(b.standard_error_n),
+        b.r2,
+        b.points
+    );
+    for p in &r.runs {
+        let k = b.k_per_plate.iter().find(|(x, _)| (x - p.b).abs() < 1e-12).map(|(_, k)| *k);
+        t.push_str(&format!(
+            "  b = {} m: k = {}, to {:.4} m sinkage at {:.4e} Pa; {:.1} s\n",
+            p.b,
+            opt(k),
+            p.max_sinkage,
+            p.max_pressure,
+            p.wall_s
+        ));
+    }
+    t
 }
 
 /// The envelope and every test, as printed.

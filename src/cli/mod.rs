@@ -252,6 +252,10 @@ pub enum CalibrateCommand {
     /// envelope (c, φ with standard errors). Writes triaxial.json, per test series.csv and
     /// stress_strain plots, and the Mohr-circle plot.
     Triaxial(TriaxialArgs),
+    /// Bekker's k_c, k_φ and n of the SPH soil, with standard errors: a plate rig scene run at
+    /// each plate size (in parallel, resumable), the law fitted to all curves; writes
+    /// bekker.json and the curves with the fit (bekker.png / .svg).
+    Plate(PlateArgs),
 }
 
 /// How a triaxial test's failure point is picked.
@@ -347,6 +351,27 @@ pub struct TriaxialArgs {
     #[arg(long, value_name = "DIR", default_value = "out/calibrate-triaxial")]
     pub out: PathBuf,
     /// How the tests are scheduled (default --jobs: one per core).
+    #[command(flatten)]
+    pub runner: BatchRunArgs,
+}
+
+/// `regolith calibrate plate ...`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PlateArgs {
+    /// A scene with a plate rig (`[rig] type = "plate"`).
+    #[arg(long, value_name = "FILE")]
+    pub scene: PathBuf,
+    /// Plate sizes, one run each (radius of a circular plate, smaller side of a rectangular
+    /// one, m) [default: the rig's `sizes`].
+    #[arg(long, value_name = "M,...", value_delimiter = ',')]
+    pub sizes: Vec<f64>,
+    /// Override a scene key in every run, e.g. `--set sph.spacing=0.01` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Output folder.
+    #[arg(long, value_name = "DIR", default_value = "out/calibrate-plate")]
+    pub out: PathBuf,
+    /// How the runs are scheduled.
     #[command(flatten)]
     pub runner: BatchRunArgs,
 }
@@ -710,6 +735,13 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 Precision::F64 => crate::scene::Precision::F64,
             };
             calibrate::repose(material, s, target_angle, tolerance, out)
+        }
+        Command::Calibrate { calibrate: CalibrateCommand::Plate(a) } => {
+            if a.runner.runner == RunnerArg::Ray {
+                return batch::ray(&a.runner, "calibrate plate");
+            }
+            batch::threads_only(&a.runner)?;
+            calibrate::plate(a.inputs()?)
         }
         Command::Calibrate { calibrate: CalibrateCommand::Triaxial(a) } => {
             if a.runner.runner == RunnerArg::Ray {

@@ -29,6 +29,21 @@ pub trait Task: Sync {
     fn run(&self, out: &Path, alone: bool) -> Record;
 }
 
+impl<T: Task + ?Sized> Task for &T {
+    fn index(&self) -> usize {
+        (**self).index()
+    }
+    fn id(&self) -> &str {
+        (**self).id()
+    }
+    fn label(&self) -> String {
+        (**self).label()
+    }
+    fn run(&self, out: &Path, alone: bool) -> Record {
+        (**self).run(out, alone)
+    }
+}
+
 /// FNV-1a (64 bit, hex) of `parts`, each followed by a zero byte: the same parts give the same
 /// id on every machine.
 pub fn fnv_id(parts: &[&[u8]]) -> String {
