@@ -36,14 +36,14 @@ mod geostatic;
 mod interrupt;
 #[path = "material_errors.rs"]
 mod material_errors;
-#[path = "plate_calibration.rs"]
-mod plate_calibration;
 #[path = "rapier_plugin.rs"]
 mod rapier_plugin;
 #[path = "recording.rs"]
 mod recording;
 #[path = "repose.rs"]
 mod repose;
+#[path = "rig_calibration.rs"]
+mod rig_calibration;
 #[path = "scene_errors.rs"]
 mod scene_errors;
 #[path = "triaxial.rs"]

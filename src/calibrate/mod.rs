@@ -14,6 +14,7 @@
 //! - [`lowpass`]: the zero-phase Butterworth filter and the failure pick of a triaxial test;
 //! - [`target`]: the calibration loop (a safeguarded secant over one material parameter).
 
+pub mod cone;
 pub mod fit;
 pub mod lowpass;
 pub mod mcc;
@@ -293,4 +294,14 @@ pub fn mohr_figure(s3: &[f64], s1: &[f64], f: &MohrCoulomb) -> Figure {
             y_range: Some((0.0, y_max)),
         }],
     }
+}
+
+/// `regolith run SCENE --set 'KEY=VALUE' ...`: the command that reproduces one run of a
+/// calibration.
+pub(crate) fn run_command(scene: &Path, overrides: &[(String, toml::Value)]) -> String {
+    let mut c = format!("regolith run {}", scene.display());
+    for (k, v) in overrides {
+        c.push_str(&format!(" --set '{k}={v}'"));
+    }
+    c
 }

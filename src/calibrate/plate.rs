@@ -4,7 +4,7 @@
 //! together ([`crate::rig::bekker::fit`]: one exponent, one k per plate, then k against 1/b),
 //! with standard errors.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use serde::Serialize;
 
@@ -144,7 +144,7 @@ impl PlatePlan {
                             max_sinkage: points.iter().map(|q| q.0).fold(0.0, f64::max),
                             max_pressure: points.iter().map(|q| q.1).fold(0.0, f64::max),
                             wall_s: r.wall_s,
-                            command: command(&inp.scene, &p.overrides),
+                            command: super::run_command(&inp.scene, &p.overrides),
                         });
                         curves.push(PlateCurve { b, points });
                     }
@@ -193,15 +193,6 @@ pub fn calibrate_plate(inp: &PlateInputs) -> Result<PlateCalibration, CommandErr
 fn curve_of(r: &Record) -> Option<Vec<(f64, f64)>> {
     let run = r.summary.as_ref()?.get("rig")?.get("runs")?.get(0)?;
     run.get("curve")?.as_array()?.iter().map(|p| Some((p.get(0)?.as_f64()?, p.get(1)?.as_f64()?))).collect()
-}
-
-/// `regolith run SCENE --set ...` for one run.
-fn command(scene: &Path, overrides: &[(String, toml::Value)]) -> String {
-    let mut c = format!("regolith run {}", scene.display());
-    for (k, v) in overrides {
-        c.push_str(&format!(" --set '{k}={v}'"));
-    }
-    c
 }
 
 /// The curves with the fitted law, and k against 1/b with its line.

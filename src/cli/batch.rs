@@ -321,6 +321,25 @@ mod tests {
     }
 
     #[test]
+    fn a_plate_calibration_opens_as_one_run_per_size() {
+        let dir = std::env::temp_dir().join(format!("regolith-batch-plate-{}", std::process::id()));
+        let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/scenes/plate_sinkage.toml");
+        let args: Vec<String> =
+            ["calibrate", "plate", "--scene", scene, "--sizes", "0.04,0.06", "--out", dir.to_str().unwrap_or(".")]
+                .iter()
+                .map(|s| s.to_string())
+                .collect();
+        let b = open(&args).map_err(|f| failure_line(&f)).expect("opens");
+        assert_eq!(b.what(), "plate");
+        let runs = b.runs();
+        assert_eq!(runs.iter().map(|r| r.0).collect::<Vec<_>>(), vec![0, 1]);
+        assert_ne!(runs[0].1, runs[1].1, "each size is its own configuration");
+        assert_eq!(b.pending(false, false).map_err(|f| failure_line(&f)).expect("pending"), vec![0, 1]);
+        assert!(b.run(5).is_err_and(|f| failure_line(&f).contains("5 is not a run")));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn the_runner_flags_of_the_other_runner_are_refused() {
         let r = BatchRunArgs {
             runner: RunnerArg::Threads,

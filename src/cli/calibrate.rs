@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use super::Failure;
+use crate::calibrate::cone::{ConeInputs, calibrate_cone};
 use crate::calibrate::plate::{PlateCalibration, PlateInputs, calibrate_plate};
 use crate::calibrate::repose::{ReposeInputs, ReposeSettings, calibrate_repose};
 use crate::calibrate::triaxial::{TriaxialInputs, TriaxialReport, calibrate_triaxial};
@@ -137,6 +138,25 @@ pub(super) fn triaxial(inp: TriaxialInputs) -> Result<(), Failure> {
                 )));
             }
         }
+    }
+    println!("outputs in {}", inp.out.display());
+    Ok(())
+}
+
+pub(super) fn cone(inp: ConeInputs) -> Result<(), Failure> {
+    let r = calibrate_cone(&inp).map_err(failure)?;
+    println!(
+        "cone index gradient G = {} ± {} Pa/m over {} layers of {} m",
+        r.gradient.map_or_else(|| "n/a".to_string(), |g| format!("{g:.4e}")),
+        se(r.standard_error_gradient),
+        r.layers.len(),
+        inp.layer
+    );
+    for l in &r.layers {
+        println!(
+            "  base depth {:.4}–{:.4} m: cone index {:.4e} ± {:.2e} Pa ({} samples)",
+            l.from, l.to, l.cone_index, l.std_dev, l.samples
+        );
     }
     println!("outputs in {}", inp.out.display());
     Ok(())

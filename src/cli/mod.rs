@@ -256,6 +256,26 @@ pub enum CalibrateCommand {
     /// each plate size (in parallel, resumable), the law fitted to all curves; writes
     /// bekker.json and the curves with the fit (bekker.png / .svg).
     Plate(PlateArgs),
+    /// The cone index profile of the SPH soil: a cone rig scene run once (recorded,
+    /// resumable), the cone index averaged over depth layers with its spread, and the gradient
+    /// G of CI = G z; writes cone.json and cone_index.png / .svg.
+    Cone {
+        /// A scene with a cone rig (`[rig] type = "cone"`).
+        #[arg(long, value_name = "FILE")]
+        scene: PathBuf,
+        /// Override a scene key, e.g. `--set sph.spacing=0.005` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Thickness of the depth layers (m).
+        #[arg(long, value_name = "M", default_value_t = 0.01)]
+        layer: f64,
+        /// Keep the run if it is already recorded in the output folder.
+        #[arg(long)]
+        resume: bool,
+        /// Output folder.
+        #[arg(long, value_name = "DIR", default_value = "out/calibrate-cone")]
+        out: PathBuf,
+    },
 }
 
 /// How a triaxial test's failure point is picked.
@@ -735,6 +755,13 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 Precision::F64 => crate::scene::Precision::F64,
             };
             calibrate::repose(material, s, target_angle, tolerance, out)
+        }
+        Command::Calibrate { calibrate: CalibrateCommand::Cone { scene, sets, layer, resume, out } } => {
+            let sets = sets
+                .iter()
+                .map(|s| crate::scene::parse_set(s).map_err(|m| InputError::flag("--set", m)))
+                .collect::<Result<Vec<_>, _>>()?;
+            calibrate::cone(crate::calibrate::cone::ConeInputs { scene, sets, layer, out, resume })
         }
         Command::Calibrate { calibrate: CalibrateCommand::Plate(a) } => {
             if a.runner.runner == RunnerArg::Ray {
