@@ -52,7 +52,8 @@ pub struct CheckResult {
     pub check: String,
     /// The bound.
     pub bound: String,
-    /// The measured figure (NaN: not measured).
+    /// The measured figure (NaN: not measured; `null` in JSON).
+    #[serde(deserialize_with = "nan_from_null")]
     pub measured: f64,
     /// Its unit.
     pub unit: String,
@@ -82,6 +83,7 @@ pub struct CaseResult {
     /// Soil steps.
     pub steps: u64,
     /// Simulated time (s).
+    #[serde(deserialize_with = "nan_from_null")]
     pub sim_time: f64,
     /// Wall-clock time (s).
     pub wall_s: f64,
@@ -92,6 +94,11 @@ pub struct CaseResult {
     pub known_failure: Option<String>,
     /// The fastest soil particle of the run: speed, when, which and where.
     pub fastest: Option<super::probe::Fastest>,
+}
+
+/// A number read back from JSON, where serde_json writes NaN as `null`.
+fn nan_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 /// The case files of a folder, by stem, sorted.
@@ -540,6 +547,23 @@ pub fn write_tables(results: &[CaseResult], out: &Path) -> Result<Vec<PathBuf>, 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_check_that_measured_nothing_survives_its_record() {
+        // A figure that could not be measured is NaN, which JSON holds as null: the record
+        // must still read back (as NaN), or the case would turn into "not carried out".
+        let c = CheckResult {
+            check: "uehara_ratio".into(),
+            bound: "[0.33, 3]".into(),
+            measured: f64::NAN,
+            unit: "".into(),
+            pass: false,
+            gating: true,
+            why: "x".into(),
+        };
+        let back: CheckResult = serde_json::from_value(serde_json::to_value(&c).expect("to")).expect("from");
+        assert!(back.measured.is_nan() && !back.pass);
+    }
 
     #[test]
     fn uehara_depth_solves_its_implicit_law() {
