@@ -2,8 +2,9 @@
 //! scene is run (one point of the sweep runner: recorded, resumable) and its cone index —
 //! force over the cone's base area — is averaged over depth layers of the base, once the cone
 //! is fully in the soil, with the spread in each layer; the cone index gradient G of
-//! `CI = G z` (Wismer and Luth's description of a uniform cohesionless soil) is fitted
-//! through the layer means with its standard error.
+//! `CI = CI₀ + G z` (Wismer and Luth describe a uniform cohesionless soil by its gradient; the
+//! intercept holds what the cone's own height adds, since z is the depth of its base) is
+//! fitted through the layer means with standard errors.
 
 use std::path::PathBuf;
 
@@ -55,10 +56,15 @@ pub struct ConeCalibration {
     pub scene: String,
     /// The profile, from the surface down.
     pub layers: Vec<ConeLayer>,
-    /// Cone index gradient G of `CI = G z`, through the layer means (Pa/m).
+    /// Cone index gradient G of `CI = CI₀ + G z`, through the layer means (Pa/m).
     pub gradient: Option<f64>,
-    /// Its standard error (Pa/m), from the layer means' scatter about the line.
+    /// Its standard error (Pa/m), from the layer means' scatter about the line (three or
+    /// more layers).
     pub standard_error_gradient: Option<f64>,
+    /// The line's intercept CI₀ at base depth 0 (Pa).
+    pub intercept: Option<f64>,
+    /// Its standard error (Pa).
+    pub standard_error_intercept: Option<f64>,
     /// The run's wall-clock time (s).
     pub wall_s: f64,
     /// The command that reproduces the run.
@@ -98,8 +104,8 @@ pub fn calibrate_cone(inp: &ConeInputs) -> Result<ConeCalibration, CommandError>
     };
     let curve = curve_of(&rec).ok_or_else(|| CommandError::Run("the cone run's summary holds no cone curve".into()))?;
     let layers = profile(&curve, inp.layer);
-    let (gradient, standard_error_gradient) = gradient(&layers);
-    let plots = write_figure(&figure(&curve, &layers, gradient), &inp.out, "cone_index")
+    let line = line(&layers);
+    let plots = write_figure(&figure(&curve, &layers, line), &inp.out, "cone_index")
         .map_err(|e| CommandError::Output(e.to_string()))?
         .iter()
         .map(|p| p.display().to_string())
@@ -108,8 +114,10 @@ pub fn calibrate_cone(inp: &ConeInputs) -> Result<ConeCalibration, CommandError>
         test: "cone_penetrometer",
         scene: inp.scene.display().to_string(),
         layers,
-        gradient,
-        standard_error_gradient,
+        gradient: line.map(|l| l.slope),
+        standard_error_gradient: line.and_then(|l| l.se_slope),
+        intercept: line.map(|l| l.intercept),
+        standard_error_intercept: line.and_then(|l| l.se_intercept),
         wall_s: rec.wall_s,
         command: super::run_command(&inp.scene, &p.overrides),
         plots,
@@ -155,25 +163,43 @@ pub fn profile(curve: &[(f64, f64)], layer: f64) -> Vec<ConeLayer> {
         .collect()
 }
 
-/// G of `CI = G z` through the layer means at their mid-depths, and its standard error
-/// (`None` with fewer than two layers).
-pub fn gradient(layers: &[ConeLayer]) -> (Option<f64>, Option<f64>) {
-    if layers.is_empty() {
-        return (None, None);
+/// A least-squares line with standard errors.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Line {
+    /// Slope.
+    pub slope: f64,
+    /// Intercept.
+    pub intercept: f64,
+    /// Slope's standard error (three or more points).
+    pub se_slope: Option<f64>,
+    /// Intercept's standard error (three or more points).
+    pub se_intercept: Option<f64>,
+}
+
+/// `CI = CI₀ + G z` through the layer means at their mid-depths (`None` with fewer than two
+/// layers).
+pub fn line(layers: &[ConeLayer]) -> Option<Line> {
+    if layers.len() < 2 {
+        return None;
     }
+    let m = layers.len() as f64;
     let z: Vec<f64> = layers.iter().map(|l| 0.5 * (l.from + l.to)).collect();
-    let szz: f64 = z.iter().map(|x| x * x).sum();
-    let g = z.iter().zip(layers).map(|(x, l)| x * l.cone_index).sum::<f64>() / szz;
-    let se = (layers.len() > 1).then(|| {
+    let (mz, mc) = (z.iter().sum::<f64>() / m, layers.iter().map(|l| l.cone_index).sum::<f64>() / m);
+    let szz: f64 = z.iter().map(|x| (x - mz).powi(2)).sum();
+    let slope = z.iter().zip(layers).map(|(x, l)| (x - mz) * (l.cone_index - mc)).sum::<f64>() / szz;
+    let intercept = mc - slope * mz;
+    let (se_slope, se_intercept) = if layers.len() > 2 {
         let s2 =
-            z.iter().zip(layers).map(|(x, l)| (l.cone_index - g * x).powi(2)).sum::<f64>() / (layers.len() - 1) as f64;
-        (s2 / szz).sqrt()
-    });
-    (Some(g), se)
+            z.iter().zip(layers).map(|(x, l)| (l.cone_index - intercept - slope * x).powi(2)).sum::<f64>() / (m - 2.0);
+        (Some((s2 / szz).sqrt()), Some((s2 * (1.0 / m + mz * mz / szz)).sqrt()))
+    } else {
+        (None, None)
+    };
+    Some(Line { slope, intercept, se_slope, se_intercept })
 }
 
 /// Cone index against base depth, the layer means and the gradient line.
-fn figure(curve: &[(f64, f64)], layers: &[ConeLayer], g: Option<f64>) -> Figure {
+fn figure(curve: &[(f64, f64)], layers: &[ConeLayer], line: Option<Line>) -> Figure {
     let mut p = Panel {
         title: "cone index profile".into(),
         x_label: "base depth (mm)".into(),
@@ -185,10 +211,10 @@ fn figure(curve: &[(f64, f64)], layers: &[ConeLayer], g: Option<f64>) -> Figure 
         "layer means",
         layers.iter().map(|l| (0.5e3 * (l.from + l.to), l.cone_index / 1e3)).collect(),
     ));
-    if let (Some(g), Some(last)) = (g, layers.last()) {
+    if let (Some(l), Some(last)) = (line, layers.last()) {
         p.series.push(Series::line(
-            format!("CI = G z, G = {:.3e} Pa/m", g),
-            vec![(0.0, 0.0), (last.to * 1e3, g * last.to / 1e3)],
+            format!("CI = CI0 + G z, G = {:.3e} Pa/m", l.slope),
+            vec![(0.0, l.intercept / 1e3), (last.to * 1e3, (l.intercept + l.slope * last.to) / 1e3)],
         ));
     }
     Figure { panels: vec![p] }
@@ -200,15 +226,16 @@ mod tests {
 
     #[test]
     fn a_linear_profile_gives_its_gradient_exactly() {
-        // CI = 2e6 z sampled every 0.1 mm (at the middles of the 0.1 mm steps) down to 30 mm:
-        // each layer's mean is the value at its mid-depth, on the line.
-        let curve: Vec<(f64, f64)> = (0..=300).map(|i| (i as f64 + 0.5) * 1e-4).map(|z| (z, 2e6 * z)).collect();
+        // CI = 5e3 + 2e6 z sampled every 0.1 mm (at the middles of the 0.1 mm steps) down to
+        // 30 mm: each layer's mean is the value at its mid-depth, on the line.
+        let curve: Vec<(f64, f64)> = (0..=300).map(|i| (i as f64 + 0.5) * 1e-4).map(|z| (z, 5e3 + 2e6 * z)).collect();
         let layers = profile(&curve, 0.01);
         assert_eq!(layers.len(), 3);
         assert_eq!(layers[0].samples, 100);
-        let (g, se) = gradient(&layers);
-        assert!((g.expect("g") - 2e6).abs() / 2e6 < 1e-9, "{g:?}");
-        assert!(se.expect("se") < 1e-6 * 2e6, "{se:?}");
-        assert!(gradient(&[]).0.is_none());
+        let l = line(&layers).expect("line");
+        assert!((l.slope - 2e6).abs() / 2e6 < 1e-9 && (l.intercept - 5e3).abs() < 1e-6, "{l:?}");
+        assert!(l.se_slope.is_some_and(|s| s < 1e-6 * 2e6) && l.se_intercept.is_some(), "{l:?}");
+        assert!(line(&layers[..1]).is_none());
+        assert!(line(&layers[..2]).is_some_and(|l| l.se_slope.is_none()), "two points leave no error");
     }
 }

@@ -146,9 +146,11 @@ pub(super) fn triaxial(inp: TriaxialInputs) -> Result<(), Failure> {
 pub(super) fn cone(inp: ConeInputs) -> Result<(), Failure> {
     let r = calibrate_cone(&inp).map_err(failure)?;
     println!(
-        "cone index gradient G = {} ± {} Pa/m over {} layers of {} m",
+        "cone index CI = CI0 + G z: G = {} ± {} Pa/m, CI0 = {} ± {} Pa over {} layers of {} m",
         r.gradient.map_or_else(|| "n/a".to_string(), |g| format!("{g:.4e}")),
         se(r.standard_error_gradient),
+        r.intercept.map_or_else(|| "n/a".to_string(), |g| format!("{g:.4e}")),
+        se(r.standard_error_intercept),
         r.layers.len(),
         inp.layer
     );
