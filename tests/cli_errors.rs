@@ -315,6 +315,11 @@ fn calibrate_triaxial_flags_and_materials_are_checked_before_running() {
         &["calibrate", "plate", "--scene", "examples/scenes/plate_sinkage.toml", "--sizes", "0.05", "--out", &o],
         "--sizes: needs two or more different plate sizes",
     );
+    // The accuracy study always resumes: --resume would be a flag that does nothing.
+    assert_one_line_error(
+        &["study", "accuracy", "--resume", "--out", &o],
+        "--resume: the accuracy study always resumes",
+    );
     // The runner's flags: each belongs to one runner.
     assert_one_line_error(&["calibrate", "triaxial", "--material", sand, "--jobs", "0", "--out", &o], "--jobs");
     assert_one_line_error(

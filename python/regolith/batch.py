@@ -26,7 +26,7 @@ from . import _regolith
 from ._regolith import InputError, RunError
 from .sweep import _Progress, _schedule_ray, _schedule_threads
 
-__all__ = ["run", "stability", "triaxial", "main"]
+__all__ = ["run", "stability", "accuracy", "triaxial", "main"]
 
 
 def run(
@@ -41,7 +41,8 @@ def run(
     retry_failed: bool = False,
     quiet: bool = False,
 ) -> str:
-    """Runs the batch ``args`` (a ``study stability`` or ``calibrate triaxial`` command line)
+    """Runs the batch ``args`` (a ``study stability``, ``study accuracy``, ``calibrate triaxial``
+    or ``calibrate plate`` command line)
     and returns the text the CLI prints. Raises ``InputError`` for a wrong argument and
     ``RunError`` when a stability case fails its bounds or a run could not be carried out
     (after every other run has finished and the tables are written)."""
@@ -55,8 +56,10 @@ def run(
     info = json.loads(_regolith.batch_runs_json(args))
     pending = _regolith.batch_pending(args, resume, retry_failed)
     slots = jobs if runner == "threads" else max(1, int((os.cpu_count() or 1) // max(num_cpus, 1)))
-    labels = {r["index"]: r["label"] for r in info["runs"]}
-    what, out = info["what"], info["out"]
+    # Keyed by configuration id: the accuracy study numbers its points per case.
+    labels = {r["id"]: r["label"] for r in info["runs"]}
+    folders = {r["id"]: r["folder"] for r in info["runs"]}
+    what = info["what"]
     if not quiet:
         how = f"Ray ({address or 'local instance'})" if runner == "ray" else f"{jobs} thread(s)"
         print(
@@ -68,8 +71,9 @@ def run(
     progress = _Progress(len(pending), slots, quiet, what=what, labels=labels)
 
     def record(line: str, running: int) -> None:
-        _regolith.sweep_append(out, line, None)
-        progress.done(json.loads(line), running)
+        rec = json.loads(line)
+        _regolith.sweep_append(folders[rec["id"]], line, None)
+        progress.done(rec, running)
 
     calls = [("batch_run", (args, i)) for i in pending]
     if calls:
@@ -101,6 +105,26 @@ def stability(
     ``cases_dir`` (default ``examples/hard``) at ``size`` (``"ci"`` or ``"full"``), each
     checked against its bounds. ``runner`` takes the keywords of ``run``."""
     args = ["study", "stability", "--size", str(size), "--out", os.fspath(out)]
+    args += _flag_list("--cases", cases)
+    if cases_dir is not None:
+        args += ["--cases-dir", os.fspath(cases_dir)]
+    return run(args, **runner)
+
+
+def accuracy(
+    cases: Optional[Iterable[str]] = None,
+    *,
+    budget: str = "standard",
+    cases_dir: Optional[str] = None,
+    out: str = "out/accuracy",
+    **runner: Any,
+) -> str:
+    """The accuracy study (``regolith study accuracy``): ``cases`` (default every case of
+    ``cases_dir``, ``examples/study``, with a section for ``budget``: ``"quick"``,
+    ``"standard"`` or ``"full"``). Each point is recorded in its case's folder; the study
+    always resumes (a finished point is never run again). ``runner`` takes the keywords of
+    ``run`` (not ``resume``)."""
+    args = ["study", "accuracy", "--budget", str(budget), "--out", os.fspath(out)]
     args += _flag_list("--cases", cases)
     if cases_dir is not None:
         args += ["--cases-dir", os.fspath(cases_dir)]

@@ -125,7 +125,7 @@ def _eta(s: float) -> str:
 class _Progress:
     def __init__(self, total: int, slots: int, quiet: bool, what: str = "sweep", labels=None) -> None:
         self.total, self.slots, self.quiet = total, max(slots, 1), quiet
-        # ``labels``: run index -> what a line calls it (default ``point N``).
+        # ``labels``: run id -> what a line calls it (default ``point N``).
         self.what, self.labels = what, labels or {}
         self.ok = self.failed = 0
         self.t0 = time.monotonic()
@@ -141,8 +141,7 @@ class _Progress:
         left = self.total - n
         eta = (time.monotonic() - self.t0) / max(n, 1) * left / self.slots if left else 0.0
         what = "ok" if rec["status"] == "ok" else f"FAILED: {rec.get('error', '')}"
-        point = rec["point"]
-        label = self.labels.get(point, f"point {point}")
+        label = self.labels.get(rec["id"], f"point {rec['point']}")
         print(
             f"{self.what}: {label} ({rec['id']}) {what} in {rec['wall_s']:.1f} s; "
             f"{n}/{self.total} done, {running} running, {self.failed} failed, ETA {_eta(eta)}",

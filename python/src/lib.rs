@@ -764,14 +764,16 @@ fn batch_err(f: regolith::cli::Failure) -> PyErr {
 
 /// The runs of a batch named by its command line (`["study", "stability", ...]` or
 /// `["calibrate", "triaxial", ...]`, as after `regolith`), as JSON: `what`, `out` and `runs`
-/// (`index`, `id`, `label`).
+/// (`index`, `id`, `label`, and `folder`, whose results file its record goes to).
 #[pyfunction]
 fn batch_runs_json(args: Vec<String>) -> PyResult<String> {
     let b = regolith::cli::batch::open(&args).map_err(batch_err)?;
     let runs: Vec<serde_json::Value> = b
         .runs()
         .into_iter()
-        .map(|(index, id, label)| serde_json::json!({ "index": index, "id": id, "label": label }))
+        .map(|(index, id, label, folder)| {
+            serde_json::json!({ "index": index, "id": id, "label": label, "folder": folder.display().to_string() })
+        })
         .collect();
     let doc = serde_json::json!({ "what": b.what(), "out": b.out().display().to_string(), "runs": runs });
     Ok(doc.to_string())

@@ -74,3 +74,22 @@ def test_triaxial_tests_run_as_ray_tasks_and_give_the_threads_envelope(materials
         for a, b in zip(ray_fit[k], threads_fit[k]):
             assert abs(a - b) <= 1e-3 * abs(b), (k, ray_fit[k], threads_fit[k])
     assert abs(ray_fit["phi"] - threads_fit["phi"]) <= 0.05
+
+
+def test_accuracy_points_run_as_ray_tasks_into_their_case_folders(tmp_path):
+    """The geostatic bed's quick ladder (4 points) as Ray tasks: each record lands in the
+    case's folder, the study's tables come out, and a second call runs nothing."""
+    cases_dir = REPO / "examples" / "study"
+    text = regolith.batch.accuracy(
+        ["geostatic_bed"], budget="quick", cases_dir=cases_dir, out=tmp_path, runner="ray", num_cpus=1, quiet=True
+    )
+    assert "geostatic_bed: order" in text, text
+    recs = _records(tmp_path / "geostatic_bed")
+    assert len(recs) == 4 and all(r["status"] == "ok" for r in recs)
+    rows = (tmp_path / "accuracy.csv").read_text().splitlines()
+    assert len(rows) == 1 + 4
+    again = regolith.batch.accuracy(
+        ["geostatic_bed"], budget="quick", cases_dir=cases_dir, out=tmp_path, runner="ray", num_cpus=1, quiet=True
+    )
+    assert again == text
+    assert _records(tmp_path / "geostatic_bed") == recs

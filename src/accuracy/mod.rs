@@ -131,7 +131,7 @@ pub fn accuracy(opts: &AccuracyOptions) -> Result<Accuracy, StudyError> {
                 c.points.len() - c.ladder.len()
             );
         }
-        let plan = Plan::from_overrides(&c.path, c.points.iter().map(|p| p.overrides.clone()).collect())?;
+        let plan = plan_of(c)?;
         let dir = out.join(&c.name);
         // Failed points are tried again; finished ones never are.
         run_local(&plan, &dir, None, opts.jobs, true, opts.quiet)?;
@@ -164,6 +164,11 @@ pub fn accuracy(opts: &AccuracyOptions) -> Result<Accuracy, StudyError> {
     crate::study::write_text(&md_path, &report::markdown(&results, &opts.budget, &machine, &command))?;
     files.push(md_path);
     Ok(Accuracy { cases: results, files })
+}
+
+/// A case's points as a sweep plan (its ladder levels, then its knob settings).
+pub fn plan_of(c: &Case) -> Result<Plan, InputError> {
+    Plan::from_overrides(&c.path, c.points.iter().map(|p| p.overrides.clone()).collect())
 }
 
 /// The command line that reproduces this study.

@@ -5,7 +5,7 @@
 //! runs each in a Ray task ([`Batch::run`], the same code the threads run) and appends its
 //! record, then lets [`Batch::finish`] write the tables from the records.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use clap::Parser;
 
@@ -16,7 +16,7 @@ use crate::calibrate::triaxial::{
 };
 use crate::input::InputError;
 use crate::study::stability::{StabilityOptions, StabilityPlan};
-use crate::sweep::{Record, Task, forget, pending, read_all};
+use crate::sweep::{Plan, PlanPoint, Record, Task, forget, pending, read_all};
 
 impl TriaxialArgs {
     /// The calibration's inputs (the material is read for its default failure rule).
@@ -169,6 +169,30 @@ pub enum Batch {
     Triaxial(TriaxialInputs, TriaxialPlan),
     /// `calibrate plate ...`.
     Plate(PlatePlan),
+    /// `study accuracy ...`: every case's points, each recorded in its case's folder.
+    Accuracy(crate::accuracy::AccuracyOptions, Vec<(String, Plan)>),
+}
+
+/// A point of the accuracy study, numbered across its cases.
+struct AccuracyPoint<'a> {
+    index: usize,
+    case: &'a str,
+    point: PlanPoint<'a>,
+}
+
+impl Task for AccuracyPoint<'_> {
+    fn index(&self) -> usize {
+        self.index
+    }
+    fn id(&self) -> &str {
+        self.point.id()
+    }
+    fn label(&self) -> String {
+        format!("case {} point {}", self.case, self.point.index())
+    }
+    fn run(&self, out: &Path, alone: bool) -> Record {
+        self.point.run(&out.join(self.case), alone)
+    }
 }
 
 /// A failure as one line.
@@ -208,12 +232,21 @@ pub fn open(args: &[String]) -> Result<Batch, Failure> {
             let plan = TriaxialPlan::new(&material, &inp.settings, &inp.out).map_err(super::calibrate::failure)?;
             Ok(Batch::Triaxial(inp, plan))
         }
+        Command::Study { study: super::StudyCommand::Accuracy { cases, budget, cases_dir, out, runner } } => {
+            let opts = super::accuracy_options(cases, budget, cases_dir, out, runner.jobs.unwrap_or(1));
+            let plans = crate::accuracy::read_cases(&opts)
+                .map_err(super::study::study_failure)?
+                .iter()
+                .map(|c| Ok((c.name.clone(), crate::accuracy::plan_of(c)?)))
+                .collect::<Result<Vec<_>, InputError>>()?;
+            Ok(Batch::Accuracy(opts, plans))
+        }
         Command::Calibrate { calibrate: super::CalibrateCommand::Plate(a) } => {
             Ok(Batch::Plate(PlatePlan::new(&a.inputs()?).map_err(super::calibrate::failure)?))
         }
         _ => Err(InputError::flag(
             "arguments",
-            "not a batch command; allowed: `study stability ...`, `calibrate triaxial ...`, `calibrate plate ...`",
+            "not a batch command; allowed: `study stability ...`, `study accuracy ...`, `calibrate triaxial ...`, `calibrate plate ...`",
         )
         .into()),
     }
@@ -226,6 +259,7 @@ impl Batch {
             Self::Stability(_) => "stability",
             Self::Triaxial(..) => "triaxial",
             Self::Plate(_) => "plate",
+            Self::Accuracy(..) => "accuracy",
         }
     }
 
@@ -235,6 +269,7 @@ impl Batch {
             Self::Stability(p) => &p.out,
             Self::Triaxial(_, p) => &p.dir,
             Self::Plate(p) => &p.inputs.out,
+            Self::Accuracy(o, _) => &o.out,
         }
     }
 
@@ -247,22 +282,59 @@ impl Batch {
                 let points = p.plan.tasks();
                 f(&points.iter().map(|t| t as &dyn Task).collect::<Vec<_>>())
             }
+            Self::Accuracy(_, plans) => {
+                let points: Vec<AccuracyPoint> = plans
+                    .iter()
+                    .flat_map(|(case, plan)| plan.tasks().into_iter().map(move |point| (case.as_str(), point)))
+                    .enumerate()
+                    .map(|(index, (case, point))| AccuracyPoint { index, case, point })
+                    .collect();
+                f(&points.iter().map(|t| t as &dyn Task).collect::<Vec<_>>())
+            }
         }
     }
 
-    /// Every run as `(index, id, label)`.
-    pub fn runs(&self) -> Vec<(usize, String, String)> {
-        self.with_tasks(|ts| ts.iter().map(|t| (t.index(), t.id().to_string(), t.label())).collect())
+    /// Every run as `(index, id, label, folder its record goes to)`.
+    pub fn runs(&self) -> Vec<(usize, String, String, PathBuf)> {
+        let folders: Vec<PathBuf> = match self {
+            Self::Accuracy(o, plans) => {
+                plans.iter().flat_map(|(case, plan)| plan.points.iter().map(move |_| o.out.join(case))).collect()
+            }
+            _ => Vec::new(),
+        };
+        self.with_tasks(|ts| {
+            ts.iter()
+                .map(|t| {
+                    let folder = folders.get(t.index()).cloned().unwrap_or_else(|| self.out().to_path_buf());
+                    (t.index(), t.id().to_string(), t.label(), folder)
+                })
+                .collect()
+        })
+    }
+
+    /// The records so far (the accuracy study: of every case's folder).
+    fn done(&self) -> Result<Vec<Record>, InputError> {
+        match self {
+            Self::Accuracy(o, plans) => {
+                let mut all = Vec::new();
+                for (case, _) in plans {
+                    all.extend(read_all(&o.out.join(case))?);
+                }
+                Ok(all)
+            }
+            _ => read_all(self.out()),
+        }
     }
 
     /// The runs to do: all (the records are forgotten first) unless `resume`, then those not
     /// recorded (and the failed ones when `retry_failed`).
     pub fn pending(&self, resume: bool, retry_failed: bool) -> Result<Vec<usize>, Failure> {
         std::fs::create_dir_all(self.out()).map_err(|e| InputError::file(self.out(), format!("cannot create: {e}")))?;
-        if !resume {
+        // The accuracy study always resumes, as its command does.
+        if !resume && !matches!(self, Self::Accuracy(..)) {
             forget(self.out())?;
         }
-        let done = read_all(self.out())?;
+        let done = self.done()?;
         Ok(self.with_tasks(|ts| pending(ts, None, &done, retry_failed).iter().map(|t| t.index()).collect()))
     }
 
@@ -297,6 +369,16 @@ impl Batch {
             Self::Plate(p) => {
                 let r = p.finish().map_err(super::calibrate::failure)?;
                 Ok(format!("{}outputs in {}", super::calibrate::plate_text(&r), p.inputs.out.display()))
+            }
+            Self::Accuracy(o, _) => {
+                // Every point is recorded: the study runs nothing and writes its tables.
+                let quiet = crate::accuracy::AccuracyOptions { quiet: true, ..o.clone() };
+                let a = crate::accuracy::accuracy(&quiet).map_err(super::study::study_failure)?;
+                let (text, failed) = super::study::accuracy_text(&a, &o.out);
+                match failed {
+                    None => Ok(text),
+                    Some(f) => Err(Failure::Run(anyhow::anyhow!("{text}\n{f}"))),
+                }
             }
         }
     }

@@ -143,16 +143,32 @@ pub enum StudyCommand {
         /// Budget: which ladders and knobs (quick runs in CI in minutes).
         #[arg(long, value_enum, default_value_t = BudgetArg::Standard)]
         budget: BudgetArg,
-        /// Points run at once (threads of this process).
-        #[arg(long, value_name = "N", default_value_t = 1)]
-        jobs: usize,
         /// Folder of case files.
         #[arg(long, value_name = "DIR", default_value = "examples/study")]
         cases_dir: PathBuf,
         /// Output folder.
         #[arg(long, value_name = "DIR", default_value = "out/accuracy")]
         out: PathBuf,
+        /// How the points are scheduled (default --jobs 1; the study always resumes).
+        #[command(flatten)]
+        runner: BatchRunArgs,
     },
+}
+
+/// The accuracy study's options from its flags.
+pub(crate) fn accuracy_options(
+    cases: Vec<String>,
+    budget: BudgetArg,
+    cases_dir: PathBuf,
+    out: PathBuf,
+    jobs: usize,
+) -> crate::accuracy::AccuracyOptions {
+    let budget = match budget {
+        BudgetArg::Quick => "quick",
+        BudgetArg::Standard => "standard",
+        BudgetArg::Full => "full",
+    };
+    crate::accuracy::AccuracyOptions { cases_dir, cases, budget: budget.into(), jobs, out, quiet: false }
 }
 
 /// Budgets of the accuracy study.
@@ -784,13 +800,19 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             batch::threads_only(&a.runner)?;
             study::stability_cmd(&a.options())
         }
-        Command::Study { study: StudyCommand::Accuracy { cases, budget, jobs, cases_dir, out } } => {
-            let budget = match budget {
-                BudgetArg::Quick => "quick",
-                BudgetArg::Standard => "standard",
-                BudgetArg::Full => "full",
-            };
-            study::accuracy_cmd(cases_dir, cases, budget.into(), jobs, out)
+        Command::Study { study: StudyCommand::Accuracy { cases, budget, cases_dir, out, runner } } => {
+            if runner.resume {
+                return Err(InputError::flag(
+                    "--resume",
+                    "the accuracy study always resumes (a finished point is never run again); drop the flag",
+                )
+                .into());
+            }
+            if runner.runner == RunnerArg::Ray {
+                return batch::ray(&runner, "study accuracy");
+            }
+            batch::threads_only(&runner)?;
+            study::accuracy_cmd(&accuracy_options(cases, budget, cases_dir, out, runner.jobs.unwrap_or(1)))
         }
     }
 }

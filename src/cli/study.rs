@@ -1,6 +1,6 @@
 //! `regolith study stability` and `regolith study accuracy`.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::anyhow;
 
@@ -47,15 +47,20 @@ pub(super) fn stability_verdict(results: &[CaseResult], out: &Path) -> (String, 
     (text, failure)
 }
 
-pub(super) fn accuracy_cmd(
-    cases_dir: PathBuf,
-    cases: Vec<String>,
-    budget: String,
-    jobs: usize,
-    out: PathBuf,
-) -> Result<(), Failure> {
-    let opts = crate::accuracy::AccuracyOptions { cases_dir, cases, budget, jobs, out: out.clone(), quiet: false };
-    let a = crate::accuracy::accuracy(&opts).map_err(study_failure)?;
+pub(super) fn accuracy_cmd(opts: &crate::accuracy::AccuracyOptions) -> Result<(), Failure> {
+    let a = crate::accuracy::accuracy(opts).map_err(study_failure)?;
+    let (text, failed) = accuracy_text(&a, &opts.out);
+    println!("{text}");
+    match failed {
+        None => Ok(()),
+        Some(f) => Err(Failure::Run(anyhow!("{f}"))),
+    }
+}
+
+/// Per case its order and cheapest setting within 5 %, as printed; and the failure when
+/// points failed.
+pub(super) fn accuracy_text(a: &crate::accuracy::Accuracy, out: &Path) -> (String, Option<String>) {
+    let mut text = String::new();
     let mut failed = Vec::new();
     for c in &a.cases {
         let n_failed = c.rows.iter().filter(|r| r.failure.is_some()).count();
@@ -63,8 +68,8 @@ pub(super) fn accuracy_cmd(
             failed.push(format!("{} ({n_failed} of {})", c.case, c.rows.len()));
         }
         let best = c.cheapest.iter().find(|(t, _)| *t == 0.05).and_then(|(_, i)| *i);
-        println!(
-            "{}: order {:.2} ({}); within 5 %: {}",
+        text.push_str(&format!(
+            "{}: order {:.2} ({}); within 5 %: {}\n",
             c.case,
             c.order.order,
             c.order.method,
@@ -76,12 +81,9 @@ pub(super) fn accuracy_cmd(
                     format!("{} = {} at d0 = {} ({:.1} s)", r.knob, r.setting, r.d0, r.wall_s)
                 }
             })
-        );
+        ));
     }
-    println!("table in {}", out.join("accuracy.md").display());
-    if failed.is_empty() {
-        Ok(())
-    } else {
-        Err(Failure::Run(anyhow!("points failed in: {} (see accuracy.md)", failed.join(", "))))
-    }
+    text.push_str(&format!("table in {}", out.join("accuracy.md").display()));
+    let failure = (!failed.is_empty()).then(|| format!("points failed in: {} (see accuracy.md)", failed.join(", ")));
+    (text, failure)
 }
