@@ -6,8 +6,6 @@
 //! [`std::error::Error::source`], down to the member crates' own errors. `Error` gathers them;
 //! [`Error::report`] prints the whole chain on one line, as the command-line tool does.
 
-use std::error::Error as StdError;
-
 pub use crate::build::BuildError;
 pub use crate::driver::RunError;
 pub use crate::element::ElementError;
@@ -45,25 +43,12 @@ impl Error {
     }
 }
 
-/// Any error and its chain of causes on one line, joined by `: `.
-pub fn report(e: &(dyn StdError + 'static)) -> String {
-    let mut out = e.to_string();
-    let mut cur = e.source();
-    while let Some(s) = cur {
-        let text = s.to_string();
-        // Errors that already print their cause (`{source}` in their message) would repeat it.
-        if !out.ends_with(&text) {
-            out.push_str(": ");
-            out.push_str(&text);
-        }
-        cur = s.source();
-    }
-    out
-}
+pub use crate::input::report;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::error::Error as StdError;
 
     #[test]
     fn report_keeps_the_chain_without_repeats() {

@@ -159,6 +159,23 @@ pub fn locate_key(source: &str, key: &str) -> Option<usize> {
     None
 }
 
+/// Any error and its chain of causes on one line, joined by `: ` (what every command prints;
+/// the facade error's `report` is this).
+pub fn report(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut out = e.to_string();
+    let mut cur = e.source();
+    while let Some(s) = cur {
+        let text = s.to_string();
+        // Errors that already print their cause (`{source}` in their message) would repeat it.
+        if !out.ends_with(&text) {
+            out.push_str(": ");
+            out.push_str(&text);
+        }
+        cur = s.source();
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

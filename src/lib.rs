@@ -45,6 +45,7 @@ pub mod material;
 pub mod output;
 pub mod rig;
 pub mod run;
+pub mod runner;
 pub mod scene;
 pub mod sim;
 pub mod study;

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 /// The root crate's top-level modules, in the order the data flows.
 /// `error`, the facade's error type, gathers the stages' own error types, so it comes after them.
-const LAYERS: [&str; 17] = [
+const LAYERS: [&str; 18] = [
     "input",
     "material",
     "element",
@@ -18,10 +18,11 @@ const LAYERS: [&str; 17] = [
     "output",
     "rig",
     "run",
+    "runner",
     "study",
-    "calibrate",
     "error",
     "sweep",
+    "calibrate",
     "accuracy",
     "bench",
     "cli",

@@ -36,9 +36,9 @@ use super::target::{TargetRun, TargetSettings, calibrate_to_target, write_calibr
 use crate::input::InputError;
 use crate::output::plot::{Figure, Panel, Series};
 use crate::output::write_figure;
+use crate::runner::{Record, Task, fnv_id, forget, read_all, run_tasks};
 use crate::scene::{Precision, load_scene};
 use crate::sim::Simulation;
-use crate::sweep::{Record, Task, fnv_id, forget, read_all, run_tasks};
 use regolith_fsi::Real;
 use regolith_fsi::config::WallContact;
 use regolith_fsi::math::Sym3;
@@ -708,7 +708,7 @@ fn number(m: &toml::Table, key: &str) -> Option<f64> {
 }
 
 /// The tests of one envelope (one per confining stress), as tasks of the shared runner
-/// ([`crate::sweep::run_tasks`]): each records its [`TriaxialTest`] in the folder's
+/// ([`crate::runner::run_tasks`]): each records its [`TriaxialTest`] in the folder's
 /// `results.jsonl`, so a rerun with `resume` runs only the tests not yet recorded, and the
 /// Python package's Ray runner can schedule them one Ray task each.
 #[derive(Clone, Debug)]
@@ -830,7 +830,7 @@ impl Task for TestTask {
                     Err(e) => rec.error = Some(format!("its result does not serialise: {e}")),
                 }
             }
-            Err(e) => rec.error = Some(crate::error::report(&e)),
+            Err(e) => rec.error = Some(crate::input::report(&e)),
         }
         rec.wall_s = start.elapsed().as_secs_f64();
         rec

@@ -6,7 +6,7 @@
 //! purpose, `reported_failure`), and mass is conserved (every particle is still there,
 //! in the domain or counted as escaped, with its mass unchanged).
 //!
-//! The cases are tasks of the shared runner ([`crate::sweep::run_tasks`]): `--jobs` of them at
+//! The cases are tasks of the shared runner ([`crate::runner::run_tasks`]): `--jobs` of them at
 //! once, one record each in the output folder's `results.jsonl` (the case's [`CaseResult`] as
 //! its summary), so that `--resume` runs only the cases not yet recorded, and the Python
 //! package's Ray runner can schedule them one Ray task each ([`StabilityPlan`]).
@@ -22,8 +22,8 @@ use super::{StudyError, write_text};
 use crate::driver::RunError;
 use crate::input::{InputError, read_text};
 use crate::run::{RunOptions, run_scene_observed};
+use crate::runner::{Record, Task, fnv_id, forget, read_all, run_tasks, toml_to_json};
 use crate::scene::{Scene, load_scene};
-use crate::sweep::{Record, Task, fnv_id, forget, read_all, run_tasks, toml_to_json};
 
 /// What to run.
 #[derive(Clone, Debug)]
@@ -253,7 +253,7 @@ impl Task for CaseTask {
                     Err(e) => rec.error = Some(format!("case {}: its result does not serialise: {e}", self.name)),
                 }
             }
-            Err(e) => rec.error = Some(crate::error::report(&e)),
+            Err(e) => rec.error = Some(crate::input::report(&e)),
         }
         rec.wall_s = start.elapsed().as_secs_f64();
         rec

@@ -8,8 +8,8 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::results::{Record, read_all};
 use crate::input::InputError;
+use crate::runner::{Record, read_all};
 use crate::study::convergence::{Convergence, richardson};
 
 /// One ladder: the points sharing every override but `over`.

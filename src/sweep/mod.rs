@@ -12,13 +12,15 @@ mod converge;
 mod design;
 mod memory;
 mod results;
-mod task;
 
+pub use crate::runner::{
+    Outcome, Record, Shard, Task, append, eta_text, fnv_id, forget, pending, read_all, results_file, run_tasks,
+    toml_to_json,
+};
 pub use converge::{Ladder, converge, lookup};
 pub use design::{Design, Values, Vary, parse_vary, points};
 pub use memory::{peak_rss_bytes, reset_peak_rss};
-pub use results::{MAX_ARRAY_COLUMNS, Record, Shard, append, merge, read_all, results_file, write_csv};
-pub use task::{Outcome, Task, eta_text, fnv_id, forget, pending, run_tasks};
+pub use results::{MAX_ARRAY_COLUMNS, merge, write_csv};
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -213,21 +215,6 @@ fn config_hash(source: &str, overrides: &[(String, toml::Value)]) -> String {
         eat(v.to_string().as_bytes());
     }
     format!("{h:016x}")
-}
-
-/// A TOML value as JSON.
-pub fn toml_to_json(v: &toml::Value) -> serde_json::Value {
-    match v {
-        toml::Value::String(s) => s.clone().into(),
-        toml::Value::Integer(i) => (*i).into(),
-        toml::Value::Float(f) => serde_json::Number::from_f64(*f).map_or(serde_json::Value::Null, Into::into),
-        toml::Value::Boolean(b) => (*b).into(),
-        toml::Value::Datetime(d) => d.to_string().into(),
-        toml::Value::Array(a) => a.iter().map(toml_to_json).collect::<Vec<_>>().into(),
-        toml::Value::Table(t) => {
-            t.iter().map(|(k, v)| (k.clone(), toml_to_json(v))).collect::<serde_json::Map<_, _>>().into()
-        }
-    }
 }
 
 /// Runs a sweep's pending points on `jobs` threads of this process, appending each record as

@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use super::results::{Record, Shard, append, read_all, results_file};
+use super::records::{Record, Shard, append, read_all, results_file};
 use crate::input::InputError;
 
 /// One unit of work of a batch.
