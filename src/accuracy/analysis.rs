@@ -106,23 +106,7 @@ pub struct CaseResult {
 
 /// The command that runs one point by hand.
 pub fn command(case: &Case, p: &PointSpec) -> String {
-    let mut c = format!("regolith run {}", shell_word(&case.path.display().to_string()));
-    for (k, v) in &p.overrides {
-        let v = match v {
-            toml::Value::String(s) => s.clone(),
-            v => v.to_string(),
-        };
-        c.push_str(&format!(" --set {}", shell_word(&format!("{k}={v}"))));
-    }
-    c
-}
-
-fn shell_word(s: &str) -> String {
-    if s.chars().all(|c| c.is_ascii_alphanumeric() || "._-/=+,".contains(c)) {
-        s.to_string()
-    } else {
-        format!("'{}'", s.replace('\'', r"'\''"))
-    }
+    crate::scene::overrides::command_line(&case.path, &p.overrides)
 }
 
 fn number(summary: Option<&serde_json::Value>, path: &str) -> Option<f64> {

@@ -119,7 +119,7 @@ pub fn calibrate_cone(inp: &ConeInputs) -> Result<ConeCalibration, CommandError>
         intercept: line.map(|l| l.intercept),
         standard_error_intercept: line.and_then(|l| l.se_intercept),
         wall_s: rec.wall_s,
-        command: super::run_command(&inp.scene, &p.overrides),
+        command: crate::scene::overrides::command_line(&inp.scene, &p.overrides),
         plots,
     };
     let json = inp.out.join("cone.json");

@@ -295,13 +295,3 @@ pub fn mohr_figure(s3: &[f64], s1: &[f64], f: &MohrCoulomb) -> Figure {
         }],
     }
 }
-
-/// `regolith run SCENE --set 'KEY=VALUE' ...`: the command that reproduces one run of a
-/// calibration.
-pub(crate) fn run_command(scene: &Path, overrides: &[(String, toml::Value)]) -> String {
-    let mut c = format!("regolith run {}", scene.display());
-    for (k, v) in overrides {
-        c.push_str(&format!(" --set '{k}={v}'"));
-    }
-    c
-}

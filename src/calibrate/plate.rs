@@ -144,7 +144,7 @@ impl PlatePlan {
                             max_sinkage: points.iter().map(|q| q.0).fold(0.0, f64::max),
                             max_pressure: points.iter().map(|q| q.1).fold(0.0, f64::max),
                             wall_s: r.wall_s,
-                            command: super::run_command(&inp.scene, &p.overrides),
+                            command: crate::scene::overrides::command_line(&inp.scene, &p.overrides),
                         });
                         curves.push(PlateCurve { b, points });
                     }

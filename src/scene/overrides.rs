@@ -91,6 +91,28 @@ pub(crate) fn apply(table: &mut toml::Table, key: &str, value: toml::Value) -> R
     Ok(())
 }
 
+/// `regolith run SCENE --set KEY=VALUE ...`: the command that reproduces one run of a scene
+/// with overrides, each word quoted for a POSIX shell where it needs it.
+pub fn command_line(scene: &std::path::Path, overrides: &[(String, toml::Value)]) -> String {
+    let mut c = format!("regolith run {}", shell_word(&scene.display().to_string()));
+    for (k, v) in overrides {
+        let v = match v {
+            toml::Value::String(s) => s.clone(),
+            v => v.to_string(),
+        };
+        c.push_str(&format!(" --set {}", shell_word(&format!("{k}={v}"))));
+    }
+    c
+}
+
+fn shell_word(s: &str) -> String {
+    if s.chars().all(|c| c.is_ascii_alphanumeric() || "._-/=+,".contains(c)) {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', r"'\''"))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
