@@ -49,7 +49,10 @@ fn squat_column_a1_matches_lube() {
 
 #[test]
 fn tall_column_a3_matches_lube() {
-    // At d0 = 12.5 mm (R0/d0 = 8) rather than the scene's 10 mm: 0.4 of the cost, so that the
-    // suite stays within CI's time. The scene as shipped is the README's figure.
-    collapse("column_collapse_tall.toml", 3.0, &["sph.spacing=0.0125"]);
+    // At d0 = 17.7 mm (R0/d0 = 5.7) rather than the scene's 10 mm, so that the suite stays
+    // within CI's time (about a sixth of the cost of 12.5 mm). The accuracy study's ladder
+    // (docs/accuracy/, case column_a3, the same scene) puts this level at −1.6 % and 12.5 mm at
+    // +7.7 %: the coarse level is not the lucky one alone. The scene as shipped is the README's
+    // figure.
+    collapse("column_collapse_tall.toml", 3.0, &["sph.spacing=0.017678"]);
 }

@@ -82,7 +82,7 @@ fn sand(phi: f64) -> std::path::PathBuf {
 #[test]
 fn the_pile_angle_grows_with_the_friction_angle_and_soil_leaves_only_into_the_sink() {
     // Sized for CI: R = 8 d0 (AGX recommends 15 and more; docs/calibration.md has the default
-    // size), a 2 R column, lifted at 0.2 m/s. What is checked does not depend on the size: a
+    // size), a 2 R column, lifted at 0.2 m/s, two friction angles. What is checked does not depend on the size: a
     // steeper friction angle makes a steeper pile, soil leaves the base only downward (nothing
     // through the base, nothing carried up by the cylinder), and the pile comes to rest.
     let mut s = ReposeSettings::for_radius(0.08);
@@ -91,7 +91,7 @@ fn the_pile_angle_grows_with_the_friction_angle_and_soil_leaves_only_into_the_si
     s.lift_speed = 0.2;
     s.relax_time = 1.0;
     let mut angles = Vec::new();
-    for phi in [20.0, 30.0, 40.0] {
+    for phi in [20.0, 40.0] {
         let out = common::out_dir(&format!("repose_{phi}"));
         let r = calibrate_repose(&ReposeInputs {
             material: sand(phi),
@@ -128,5 +128,5 @@ fn the_pile_angle_grows_with_the_friction_angle_and_soil_leaves_only_into_the_si
         }
         angles.push(r.analysis.mean_deg);
     }
-    assert!(angles[0] < angles[1] && angles[1] < angles[2], "angles {angles:?} grow with φ = 20, 30, 40");
+    assert!(angles[0] < angles[1], "angles {angles:?} grow with φ = 20, 40");
 }

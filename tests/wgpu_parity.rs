@@ -345,7 +345,9 @@ fn geostatic_box_stresses_agree_within_one_percent() {
 
 #[test]
 fn column_collapse_runout_agrees_within_two_percent() {
-    let scene = common::example("column_collapse.toml", &["sph.spacing=0.02", "simulation.end_time=0.4"]);
+    // 0.25 s: mid-flow (runout 0.70 of the 1.05 it reaches at 0.4 s), where a divergence
+    // between the backends would show most.
+    let scene = common::example("column_collapse.toml", &["sph.spacing=0.02", "simulation.end_time=0.25"]);
     let [(c, _), (g, _)] = both(&scene, "column");
     let (rc, rg) = (c.runout.expect("runout").normalized, g.runout.expect("runout").normalized);
     assert!(rc > 0.3, "the column spread ({rc})");
@@ -360,7 +362,8 @@ fn plate_sinkage_force_curve_agrees_within_three_percent() {
         &[
             "sph.spacing=0.02",
             "rig.sizes=[0.05]",
-            "rig.depth=0.01",
+            "rig.depth=0.006",
+            "rig.speed=0.1",
             "container.max=[0.3, 0.3, 0.2]",
             "terrain.depth=0.08",
         ],
