@@ -297,6 +297,38 @@ fn calibrate_triaxial_flags_and_materials_are_checked_before_running() {
         &["calibrate", "triaxial", "--material", sand, "--target-phi", "30", "--confining", "5e3,1e4", "--out", &o],
         "--confining: --target-phi needs at least three confining stresses",
     );
+    // --target-c: a cohesion ≥ 0, a tolerance > 0, three tests, a Drucker–Prager material, and
+    // not on Ray (its rounds depend on each other).
+    assert_one_line_error(&["calibrate", "triaxial", "--material", sand, "--target-c=-5", "--out", &o], "--target-c");
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--target-c", "2e3", "--confining", "5e3,1e4", "--out", &o],
+        "--confining: --target-c needs at least three confining stresses",
+    );
+    assert_one_line_error(
+        &[
+            "calibrate",
+            "triaxial",
+            "--material",
+            sand,
+            "--target-phi",
+            "30",
+            "--target-c",
+            "2e3",
+            "--tolerance-c",
+            "0",
+            "--out",
+            &o,
+        ],
+        "--tolerance-c: must be > 0 Pa",
+    );
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", CLAY, "--target-c", "2e3", "--out", &o],
+        "--target-c adjusts `cohesion`, a key of drucker-prager materials only",
+    );
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--target-c", "2e3", "--runner", "ray", "--out", &o],
+        "--target-c: its rounds run one after another",
+    );
     let bad = material(
         "triaxial_bad.toml",
         "model = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = -1e6\npoisson_ratio = 0.3\nfriction_angle = 30\n",

@@ -41,6 +41,8 @@ fn run(
         resume: false,
         target_phi: None,
         tolerance_phi: 0.5,
+        target_c: None,
+        tolerance_c: None,
     })
     .unwrap_or_else(|e| panic!("{name}: {e}"));
     for t in &r.tests {

@@ -665,7 +665,7 @@ pub fn calibrate_repose(inp: &ReposeInputs) -> Result<ReposeReport, CommandError
     let written = match loop_run.converged {
         Some(phi) => Some(write_calibrated(
             &inp.material,
-            phi,
+            &[("friction_angle", phi)],
             &format!(
                 "`regolith calibrate repose --target-angle {target}`: friction_angle set so that the SPH pile stands\n# at the target angle (see repose.json)"
             ),

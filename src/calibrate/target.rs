@@ -156,12 +156,140 @@ pub fn calibrate_to_target<E>(
     }
 }
 
-/// Writes `base` with its friction angle set to `phi` to `out`, under a header saying which
-/// command wrote it and why (`why`, one line), and checks it by loading it back. Returns the
-/// path written.
-pub fn write_calibrated(base: &Path, phi: f64, why: &str, out: &Path) -> Result<String, CommandError> {
+/// One evaluation of the joint loop.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct JointIterate {
+    /// Parameter values tried, in the order of [`JointRun::parameters`].
+    pub parameters: Vec<f64>,
+    /// What the test measured, one per target.
+    pub measured: Vec<f64>,
+    /// Their uncertainties (standard errors).
+    pub uncertainty: Vec<f64>,
+}
+
+/// The joint loop's settings: one target per parameter, the i-th measurement steered mainly by
+/// the i-th parameter (a test's c and φ both move with the material's c and φ).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct JointSettings {
+    /// Parameter names (material keys), for the record and the errors.
+    pub parameters: Vec<String>,
+    /// The values the test should measure.
+    pub target: Vec<f64>,
+    /// Smallest tolerance of each, whatever the measurement's uncertainty.
+    pub tolerance_floor: Vec<f64>,
+    /// Allowed range of each parameter (inclusive).
+    pub range: Vec<(f64, f64)>,
+    /// Most evaluations.
+    pub max_evaluations: usize,
+}
+
+/// The joint loop's record.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct JointRun {
+    /// Parameter names.
+    pub parameters: Vec<String>,
+    /// Every evaluation, in order.
+    pub iterates: Vec<JointIterate>,
+    /// The accepted parameters, if every target was met at once.
+    pub converged: Option<Vec<f64>>,
+    /// Why not, otherwise.
+    pub failure: Option<String>,
+}
+
+/// Runs the joint loop from `start`: Broyden's method on the misses, each coordinate scaled by
+/// its tolerance. The first Jacobian is the identity: the measurement moves one for one with
+/// the typed value (an SPH sample's c and φ are the material's plus an offset of the
+/// discretisation, which the loop removes); each evaluation then corrects it with Broyden's
+/// rank-one update, which learns the coupling between the parameters (a larger φ raises the
+/// measured c too). It stops when every measurement is within its uncertainty (or floor) of
+/// its target. A step that would leave a parameter's range tries that range's end once, then
+/// stops naming the parameter; a Jacobian that cannot be inverted stops as flat.
+pub fn calibrate_jointly<E>(
+    s: &JointSettings,
+    start: &[f64],
+    mut eval: impl FnMut(&[f64]) -> Result<(Vec<f64>, Vec<f64>), E>,
+) -> Result<JointRun, E> {
+    let n = start.len();
+    assert!(
+        n == 2 && s.target.len() == n && s.tolerance_floor.len() == n && s.range.len() == n && s.parameters.len() == n,
+        "the joint loop steers two parameters"
+    );
+    let mut run = JointRun { parameters: s.parameters.clone(), iterates: Vec::new(), converged: None, failure: None };
+    // Scaled coordinates: parameter / floor, measurement / floor.
+    let sc = |v: &[f64]| -> [f64; 2] { [v[0] / s.tolerance_floor[0], v[1] / s.tolerance_floor[1]] };
+    let mut jac = [[1.0, 0.0], [0.0, 1.0]];
+    let mut x = [start[0], start[1]];
+    let mut prev: Option<([f64; 2], [f64; 2])> = None;
+    let mut edge_tried = [false; 2];
+    loop {
+        let (m, u) = eval(&x)?;
+        run.iterates.push(JointIterate { parameters: x.to_vec(), measured: m.clone(), uncertainty: u.clone() });
+        let within = (0..2).all(|i| (m[i] - s.target[i]).abs() <= u[i].max(s.tolerance_floor[i]));
+        if within {
+            run.converged = Some(x.to_vec());
+            return Ok(run);
+        }
+        if run.iterates.len() >= s.max_evaluations {
+            run.failure = Some(TargetError::Exhausted(run.iterates.len()).to_string());
+            return Ok(run);
+        }
+        let (xs, ms) = (sc(&x), sc(&m));
+        if let Some((px, pm)) = prev {
+            let dx = [xs[0] - px[0], xs[1] - px[1]];
+            let dm = [ms[0] - pm[0], ms[1] - pm[1]];
+            let dd = dx[0] * dx[0] + dx[1] * dx[1];
+            if dd > 0.0 {
+                for (row, dmi) in jac.iter_mut().zip(dm) {
+                    let r = dmi - (row[0] * dx[0] + row[1] * dx[1]);
+                    row[0] += r * dx[0] / dd;
+                    row[1] += r * dx[1] / dd;
+                }
+            }
+        }
+        prev = Some((xs, ms));
+        let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+        let scale = jac.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+        if det.is_nan() || det.abs() <= 1e-9 * scale * scale {
+            let p = &run.iterates[run.iterates.len() - 2];
+            run.failure = Some(format!(
+                "the measurements did not change independently between {:?} and {:?}: the loop cannot steer",
+                p.parameters,
+                x.to_vec()
+            ));
+            return Ok(run);
+        }
+        let r = [(s.target[0] - m[0]) / s.tolerance_floor[0], (s.target[1] - m[1]) / s.tolerance_floor[1]];
+        let step = [(jac[1][1] * r[0] - jac[0][1] * r[1]) / det, (jac[0][0] * r[1] - jac[1][0] * r[0]) / det];
+        let mut next = [(xs[0] + step[0]) * s.tolerance_floor[0], (xs[1] + step[1]) * s.tolerance_floor[1]];
+        for (i, v) in next.iter_mut().enumerate() {
+            let (lo, hi) = s.range[i];
+            if !v.is_finite() || *v < lo || *v > hi {
+                let edge = if *v > hi { hi } else { lo };
+                if !edge_tried[i] && v.is_finite() && (x[i] - edge).abs() > 1e-12 * edge.abs().max(1.0) {
+                    edge_tried[i] = true;
+                    *v = edge;
+                } else {
+                    run.failure = Some(format!(
+                        "{}: {}",
+                        s.parameters[i],
+                        TargetError::OutOfRange { target: s.target[i], lo, hi, at: x[i], measured: m[i] }
+                    ));
+                    return Ok(run);
+                }
+            }
+        }
+        x = next;
+    }
+}
+
+/// Writes `base` with the keys `set` changed to `out`, under a header saying which command
+/// wrote it and why (`why`, one line), and checks it by loading it back. Returns the path
+/// written.
+pub fn write_calibrated(base: &Path, set: &[(&str, f64)], why: &str, out: &Path) -> Result<String, CommandError> {
     let mut t = material_table(base)?;
-    t.insert("friction_angle".into(), phi.into());
+    for (k, v) in set {
+        t.insert((*k).into(), (*v).into());
+    }
     let body = toml::to_string(&t).map_err(|e| CommandError::Output(e.to_string()))?;
     let text = format!("# Written by {why} from {}; other keys as there.\n{body}", base.display());
     std::fs::write(out, text).map_err(|e| CommandError::Output(format!("cannot write {}: {e}", out.display())))?;
@@ -214,5 +342,51 @@ mod tests {
         assert!(r.failure.unwrap().contains("did not change"));
         let e = calibrate_to_target(&settings(20.0), 30.0, |_| Err::<(f64, f64), _>("run failed")).unwrap_err();
         assert_eq!(e, "run failed");
+    }
+
+    fn joint(target: [f64; 2]) -> JointSettings {
+        JointSettings {
+            parameters: vec!["friction_angle".into(), "cohesion".into()],
+            target: target.to_vec(),
+            tolerance_floor: vec![0.5, 100.0],
+            range: vec![(1.0, 60.0), (0.0, 1e6)],
+            max_evaluations: 8,
+        }
+    }
+
+    /// A sample whose φ reads 2° low and whose c reads 20 % low plus 40 Pa per degree of φ
+    /// (coupled, as an envelope fitted over a few circles is): linear, so Broyden's method
+    /// lands in a few steps.
+    fn coupled(p: &[f64]) -> Vec<f64> {
+        vec![p[0] - 2.0 + 0.0002 * p[1], 0.8 * p[1] + 40.0 * (p[0] - 30.0)]
+    }
+
+    #[test]
+    fn the_joint_loop_meets_both_targets_of_a_coupled_response() {
+        let r = calibrate_jointly::<()>(&joint([35.0, 2000.0]), &[35.0, 2000.0], |p| Ok((coupled(p), vec![0.3, 80.0])))
+            .unwrap();
+        let c = r.converged.clone().unwrap_or_else(|| panic!("{r:?}"));
+        let m = coupled(&c);
+        assert!((m[0] - 35.0).abs() <= 0.5 && (m[1] - 2000.0).abs() <= 100.0, "{r:?}");
+        assert!(r.iterates.len() <= 5, "{} evaluations: {r:?}", r.iterates.len());
+    }
+
+    #[test]
+    fn the_joint_loop_names_the_parameter_it_cannot_reach_and_stops_when_flat() {
+        // A cohesion the sample can only reach with a negative one.
+        let r = calibrate_jointly::<()>(&joint([30.0, 10.0]), &[30.0, 1000.0], |p| {
+            Ok((vec![p[0], 0.5 * p[1] + 300.0], vec![0.3, 10.0]))
+        })
+        .unwrap();
+        assert!(r.converged.is_none());
+        assert_eq!(r.iterates.last().unwrap().parameters[1], 0.0, "tries the range end: {r:?}");
+        let f = r.failure.unwrap();
+        assert!(f.starts_with("cohesion: the target 10 needs a parameter outside [0, 1000000]"), "{f}");
+        // The measured c does not follow the typed one: no step can be taken.
+        let r = calibrate_jointly::<()>(&joint([30.0, 2000.0]), &[30.0, 1000.0], |p| {
+            Ok((vec![p[0], 500.0], vec![0.3, 10.0]))
+        })
+        .unwrap();
+        assert!(r.failure.is_some_and(|f| f.contains("cannot steer")));
     }
 }

@@ -32,7 +32,9 @@ use super::CommandError;
 use super::fit::{MohrCoulomb, mohr_coulomb, mohr_coulomb_cohesionless};
 use super::lowpass::{Butterworth, Failure, FailureKind, first_peak, plateau};
 use super::repose::material_table;
-use super::target::{TargetRun, TargetSettings, calibrate_to_target, write_calibrated};
+use super::target::{
+    JointRun, JointSettings, TargetRun, TargetSettings, calibrate_jointly, calibrate_to_target, write_calibrated,
+};
 use crate::input::InputError;
 use crate::output::plot::{Figure, Panel, Series};
 use crate::output::write_figure;
@@ -629,10 +631,26 @@ pub struct TriaxialInputs {
     /// The loop accepts a φ within this many degrees of the target, or within its standard
     /// error if that is larger.
     pub tolerance_phi: f64,
+    /// Adjust the material's cohesion until the sample's measured c is this (Pa); with
+    /// `target_phi` too, both are adjusted together.
+    pub target_c: Option<f64>,
+    /// The loop accepts a c within this many pascals of the target, or within its standard
+    /// error if that is larger; `None`: [`C_TOLERANCE_FRACTION`] of the target, at least
+    /// [`C_TOLERANCE_MIN`].
+    pub tolerance_c: Option<f64>,
 }
 
 /// Default smallest tolerance of the φ loop (degrees).
 pub const PHI_TOLERANCE: f64 = 0.5;
+
+/// Default smallest tolerance of the c loop, as a fraction of the target cohesion.
+pub const C_TOLERANCE_FRACTION: f64 = 0.05;
+
+/// Default smallest tolerance of the c loop (Pa), whatever the target.
+pub const C_TOLERANCE_MIN: f64 = 50.0;
+
+/// Cohesions the c loop may try (Pa).
+pub const C_RANGE: (f64, f64) = (0.0, 1e8);
 
 /// `triaxial.json`, with AGX's field names for the envelope and the failure stresses.
 #[derive(Clone, Debug, Serialize)]
@@ -681,8 +699,12 @@ pub struct TriaxialReport {
     pub settings: TriaxialSettings,
     /// Plots written.
     pub plots: Vec<String>,
-    /// The calibration loop (`--target-phi`).
+    /// The one-parameter calibration loop (`--target-phi` or `--target-c` alone).
     pub calibration: Option<TargetRun>,
+    /// The material key that loop adjusted (`friction_angle` or `cohesion`).
+    pub calibration_parameter: Option<&'static str>,
+    /// The joint loop (`--target-phi` with `--target-c`).
+    pub joint_calibration: Option<JointRun>,
     /// The calibrated material file, when the loop converged.
     pub calibrated_material: Option<String>,
 }
@@ -865,61 +887,200 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
         return Err(InputError::flag("--jobs", "0 tests at once runs nothing; allowed: 1 or more").into());
     }
     let material = material_table(&inp.material)?;
-    let Some(target) = inp.target_phi else {
+    if inp.target_phi.is_none() && inp.target_c.is_none() {
         let (tests, fit) = run_all(&material, s, &inp.out, inp.jobs, inp.resume)?;
-        return report(inp, &inp.out, &material, tests, fit, None, None);
-    };
-    if !(target.is_finite() && target > 0.0 && target < 90.0) {
-        return Err(InputError::flag("--target-phi", format!("must be between 0 and 90 degrees (got {target})")).into());
+        return report(inp, &inp.out, &material, tests, fit, Calibration::None);
     }
-    if !(inp.tolerance_phi.is_finite() && inp.tolerance_phi > 0.0) {
-        return Err(InputError::flag("--tolerance", format!("must be > 0 degrees (got {})", inp.tolerance_phi)).into());
-    }
-    if s.confining.len() < 3 {
-        return Err(InputError::flag(
-            "--confining",
-            "--target-phi needs at least three confining stresses (the loop uses φ's standard error)".to_string(),
-        )
-        .into());
-    }
-    let phi0 = number(&material, "friction_angle").ok_or_else(|| {
-        InputError::key(&inp.material, "friction_angle", "is needed for --target-phi: the loop adjusts it")
-    })?;
-    let settings = TargetSettings {
-        target,
-        tolerance_floor: inp.tolerance_phi,
-        range: super::repose::PHI_RANGE,
-        max_evaluations: super::repose::MAX_EVALUATIONS,
-    };
+    let targets = Targets::check(inp, &material)?;
+    // One round: the tests of one material in `iteration_<k>/`.
     let mut last = None;
     let mut k = 0;
-    let loop_run = calibrate_to_target(&settings, phi0, |phi| {
+    let mut round = |set: &[(&'static str, f64)]| -> Result<MohrCoulomb, CommandError> {
         k += 1;
         let mut m = material.clone();
-        m.insert("friction_angle".into(), phi.into());
+        for (key, v) in set {
+            m.insert((*key).into(), (*v).into());
+        }
         let dir = inp.out.join(format!("iteration_{k}"));
         let (tests, fit) = run_all(&m, s, &dir, inp.jobs, inp.resume)?;
-        let se = fit.se_phi.unwrap_or(0.0);
-        eprintln!("  friction_angle = {phi:.3}°: sample φ = {:.2}° ± {:.2}° (target {target}°)", fit.phi, se);
-        let out = (fit.phi, se);
+        let typed: Vec<String> = set.iter().map(|(key, v)| format!("{key} = {v:.4}")).collect();
+        eprintln!(
+            "  {}: sample φ = {:.2}° ± {:.2}°, c = {:.1} ± {:.1} Pa",
+            typed.join(", "),
+            fit.phi,
+            fit.se_phi.unwrap_or(0.0),
+            fit.c,
+            fit.se_c.unwrap_or(0.0)
+        );
         last = Some((m, tests, fit, dir));
-        Ok::<_, CommandError>(out)
-    })?;
+        Ok(fit)
+    };
+    let why = |what: &str| {
+        format!(
+            "`regolith calibrate triaxial {what}`: set so that the SPH sample's\n# triaxial envelope meets the target (see triaxial.json)"
+        )
+    };
+    let (calibration, written) = match targets {
+        Targets::Joint { phi, c, tolerance_c, start } => {
+            let settings = JointSettings {
+                parameters: vec!["friction_angle".into(), "cohesion".into()],
+                target: vec![phi, c],
+                tolerance_floor: vec![inp.tolerance_phi, tolerance_c],
+                range: vec![super::repose::PHI_RANGE, C_RANGE],
+                max_evaluations: super::repose::MAX_EVALUATIONS,
+            };
+            let run = calibrate_jointly(&settings, &start, |p| {
+                let fit = round(&[("friction_angle", p[0]), ("cohesion", p[1])])?;
+                Ok::<_, CommandError>((vec![fit.phi, fit.c], vec![fit.se_phi.unwrap_or(0.0), fit.se_c.unwrap_or(0.0)]))
+            })?;
+            let written = match &run.converged {
+                Some(p) => Some(write_calibrated(
+                    &inp.material,
+                    &[("friction_angle", p[0]), ("cohesion", p[1])],
+                    &why(&format!("--target-phi {phi} --target-c {c}")),
+                    &inp.out.join("material.toml"),
+                )?),
+                None => None,
+            };
+            (Calibration::Joint(run), written)
+        }
+        Targets::One { key, target, tolerance, range, start } => {
+            let settings = TargetSettings {
+                target,
+                tolerance_floor: tolerance,
+                range,
+                max_evaluations: super::repose::MAX_EVALUATIONS,
+            };
+            let is_phi = key == "friction_angle";
+            let run = calibrate_to_target(&settings, start, |v| {
+                let fit = round(&[(key, v)])?;
+                Ok::<_, CommandError>(if is_phi {
+                    (fit.phi, fit.se_phi.unwrap_or(0.0))
+                } else {
+                    (fit.c, fit.se_c.unwrap_or(0.0))
+                })
+            })?;
+            let flag = if is_phi { "--target-phi" } else { "--target-c" };
+            let written = match run.converged {
+                Some(v) => Some(write_calibrated(
+                    &inp.material,
+                    &[(key, v)],
+                    &why(&format!("{flag} {target}")),
+                    &inp.out.join("material.toml"),
+                )?),
+                None => None,
+            };
+            (Calibration::One(key, run), written)
+        }
+    };
     let Some((m, tests, fit, dir)) = last else {
         return Err(CommandError::Run(format!("{}: the calibration loop ran no test", inp.material.display())));
     };
-    let written = match loop_run.converged {
-        Some(phi) => Some(write_calibrated(
-            &inp.material,
-            phi,
-            &format!(
-                "`regolith calibrate triaxial --target-phi {target}`: friction_angle set so that the SPH sample's\n# triaxial envelope has the target angle (see triaxial.json)"
-            ),
-            &inp.out.join("material.toml"),
-        )?),
-        None => None,
-    };
-    report(inp, &dir, &m, tests, fit, Some(loop_run), written)
+    report(inp, &dir, &m, tests, fit, calibration.with(written))
+}
+
+/// What a calibration asks for, checked.
+enum Targets {
+    /// One key.
+    One { key: &'static str, target: f64, tolerance: f64, range: (f64, f64), start: f64 },
+    /// φ and c together.
+    Joint { phi: f64, c: f64, tolerance_c: f64, start: [f64; 2] },
+}
+
+impl Targets {
+    fn check(inp: &TriaxialInputs, material: &toml::Table) -> Result<Self, CommandError> {
+        let flags = match (inp.target_phi, inp.target_c) {
+            (Some(_), Some(_)) => "--target-phi and --target-c need",
+            (Some(_), None) => "--target-phi needs",
+            _ => "--target-c needs",
+        };
+        if inp.settings.confining.len() < 3 {
+            return Err(InputError::flag(
+                "--confining",
+                format!("{flags} at least three confining stresses (the loop uses the envelope's standard errors)"),
+            )
+            .into());
+        }
+        if let Some(t) = inp.target_phi {
+            if !(t.is_finite() && t > 0.0 && t < 90.0) {
+                return Err(
+                    InputError::flag("--target-phi", format!("must be between 0 and 90 degrees (got {t})")).into()
+                );
+            }
+            if !(inp.tolerance_phi.is_finite() && inp.tolerance_phi > 0.0) {
+                return Err(InputError::flag(
+                    "--tolerance",
+                    format!("must be > 0 degrees (got {})", inp.tolerance_phi),
+                )
+                .into());
+            }
+        }
+        let phi0 = || {
+            number(material, "friction_angle").ok_or_else(|| {
+                CommandError::from(InputError::key(
+                    &inp.material,
+                    "friction_angle",
+                    "is needed for --target-phi: the loop adjusts it",
+                ))
+            })
+        };
+        let Some(c) = inp.target_c else {
+            let target = inp.target_phi.unwrap_or_default();
+            return Ok(Self::One {
+                key: "friction_angle",
+                target,
+                tolerance: inp.tolerance_phi,
+                range: super::repose::PHI_RANGE,
+                start: phi0()?,
+            });
+        };
+        if !(c.is_finite() && c >= 0.0 && c <= C_RANGE.1) {
+            return Err(
+                InputError::flag("--target-c", format!("must be between 0 and {:e} Pa (got {c})", C_RANGE.1)).into()
+            );
+        }
+        let tolerance_c = inp.tolerance_c.unwrap_or((C_TOLERANCE_FRACTION * c).max(C_TOLERANCE_MIN));
+        if !(tolerance_c.is_finite() && tolerance_c > 0.0) {
+            return Err(InputError::flag("--tolerance-c", format!("must be > 0 Pa (got {tolerance_c})")).into());
+        }
+        let model = material.get("model").and_then(|v| v.as_str()).unwrap_or("");
+        if model != "drucker-prager" {
+            return Err(InputError::key(
+                &inp.material,
+                "model",
+                format!("is \"{model}\"; --target-c adjusts `cohesion`, a key of drucker-prager materials only"),
+            )
+            .into());
+        }
+        // A cohesionless material starts at the target (a proportional step needs c > 0).
+        let c0 = number(material, "cohesion").filter(|v| *v > 0.0).unwrap_or(c.max(tolerance_c));
+        Ok(match inp.target_phi {
+            Some(phi) => Self::Joint { phi, c, tolerance_c, start: [phi0()?, c0] },
+            None => Self::One { key: "cohesion", target: c, tolerance: tolerance_c, range: C_RANGE, start: c0 },
+        })
+    }
+}
+
+/// The calibration a report carries.
+enum Calibration {
+    None,
+    One(&'static str, TargetRun),
+    Joint(JointRun),
+}
+
+/// A calibration and the material file it wrote.
+struct Calibrated(Calibration, Option<String>);
+
+impl Calibration {
+    fn with(self, written: Option<String>) -> Calibrated {
+        Calibrated(self, written)
+    }
+}
+
+impl From<Calibration> for Calibrated {
+    fn from(c: Calibration) -> Self {
+        Calibrated(c, None)
+    }
 }
 
 /// The envelope of tests already run and recorded in `inp.out` (by the Ray runner, say):
@@ -928,7 +1089,7 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
 pub fn envelope_of_recorded(inp: &TriaxialInputs) -> Result<TriaxialReport, CommandError> {
     let material = material_table(&inp.material)?;
     let (tests, fit) = TriaxialPlan::new(&material, &inp.settings, &inp.out)?.finish()?;
-    report(inp, &inp.out, &material, tests, fit, None, None)
+    report(inp, &inp.out, &material, tests, fit, Calibration::None)
 }
 
 fn report(
@@ -937,9 +1098,14 @@ fn report(
     material: &toml::Table,
     tests: Vec<TriaxialTest>,
     fit: MohrCoulomb,
-    calibration: Option<TargetRun>,
-    calibrated_material: Option<String>,
+    calibration: impl Into<Calibrated>,
 ) -> Result<TriaxialReport, CommandError> {
+    let Calibrated(calibration, calibrated_material) = calibration.into();
+    let (calibration, calibration_parameter, joint_calibration) = match calibration {
+        Calibration::None => (None, None, None),
+        Calibration::One(key, run) => (Some(run), Some(key), None),
+        Calibration::Joint(run) => (None, None, Some(run)),
+    };
     let s = &inp.settings;
     let out_err = |e: String| CommandError::Output(e);
     let mut plots: Vec<PathBuf> = tests.iter().flat_map(|t| t.plots.iter().map(PathBuf::from)).collect();
@@ -975,6 +1141,8 @@ fn report(
         settings: s.clone(),
         plots: plots.iter().map(|p| p.display().to_string()).collect(),
         calibration,
+        calibration_parameter,
+        joint_calibration,
         calibrated_material,
     };
     std::fs::create_dir_all(&inp.out).map_err(|e| out_err(format!("cannot create {}: {e}", inp.out.display())))?;

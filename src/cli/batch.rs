@@ -52,6 +52,8 @@ impl TriaxialArgs {
             resume: self.runner.resume,
             target_phi: self.target_phi,
             tolerance_phi: self.tolerance,
+            target_c: self.target_c,
+            tolerance_c: self.tolerance_c,
         })
     }
 }
@@ -127,6 +129,19 @@ pub(super) fn check_ray_flags(
 
 /// Hands the command (this process's own arguments) to the Python package's Ray runner
 /// (`regolith.batch`) and passes its exit code on.
+/// A triaxial calibration loop (`--target-phi`, `--target-c`) is no batch: its rounds run
+/// one after another.
+pub(super) fn no_loop_on_ray(a: &TriaxialArgs) -> Result<(), Failure> {
+    match (a.target_phi, a.target_c) {
+        (None, None) => Ok(()),
+        (phi, _) => Err(InputError::flag(
+            if phi.is_some() { "--target-phi" } else { "--target-c" },
+            "its rounds run one after another; use --runner threads (each round's tests still run in parallel)",
+        )
+        .into()),
+    }
+}
+
 pub(super) fn ray(r: &BatchRunArgs, what: &str) -> Result<(), Failure> {
     check_ray_flags(r.jobs, r.num_cpus, r.num_gpus)?;
     let python = std::env::var(super::sweep::PYTHON_ENV).unwrap_or_else(|_| "python3".into());
@@ -165,7 +180,8 @@ pub(super) fn ray(r: &BatchRunArgs, what: &str) -> Result<(), Failure> {
 pub enum Batch {
     /// `study stability ...`.
     Stability(StabilityPlan),
-    /// `calibrate triaxial ...` (without `--target-phi`: its rounds depend on each other).
+    /// `calibrate triaxial ...` (without `--target-phi` or `--target-c`: their rounds depend
+    /// on each other).
     Triaxial(TriaxialInputs, TriaxialPlan),
     /// `calibrate plate ...`.
     Plate(PlatePlan),
@@ -219,13 +235,7 @@ pub fn open(args: &[String]) -> Result<Batch, Failure> {
             Ok(Batch::Stability(StabilityPlan::new(&a.options()).map_err(super::study::study_failure)?))
         }
         Command::Calibrate { calibrate: super::CalibrateCommand::Triaxial(a) } => {
-            if a.target_phi.is_some() {
-                return Err(InputError::flag(
-                    "--target-phi",
-                    "its rounds run one after another; use --runner threads (each round's tests still run in parallel)",
-                )
-                .into());
-            }
+            no_loop_on_ray(&a)?;
             let inp = a.inputs()?;
             inp.settings.check().map_err(|(flag, msg)| InputError::flag(flag, msg))?;
             let material = crate::calibrate::repose::material_table(&inp.material)?;

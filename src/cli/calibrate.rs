@@ -125,15 +125,28 @@ pub(super) fn repose(
 pub(super) fn triaxial(inp: TriaxialInputs) -> Result<(), Failure> {
     let r = calibrate_triaxial(&inp).map_err(failure)?;
     print!("{}", triaxial_text(&r));
-    if let Some(c) = &r.calibration {
-        match (c.converged, &r.calibrated_material) {
-            (Some(phi), Some(m)) => {
-                println!("calibrated: friction_angle = {phi:.3}° after {} rounds; material: {m}", c.iterates.len())
-            }
+    let outcome = match (&r.calibration, &r.joint_calibration) {
+        (Some(c), _) => Some((
+            c.converged.map(|v| format!("{} = {v:.4}", r.calibration_parameter.unwrap_or("parameter"))),
+            c.iterates.len(),
+            c.failure.clone(),
+        )),
+        (None, Some(j)) => Some((
+            j.converged.as_ref().map(|v| {
+                j.parameters.iter().zip(v).map(|(k, x)| format!("{k} = {x:.4}")).collect::<Vec<_>>().join(", ")
+            }),
+            j.iterates.len(),
+            j.failure.clone(),
+        )),
+        (None, None) => None,
+    };
+    if let Some((set, rounds, why)) = outcome {
+        match (set, &r.calibrated_material) {
+            (Some(set), Some(m)) => println!("calibrated: {set} after {rounds} rounds; material: {m}"),
             _ => {
                 return Err(Failure::Run(anyhow::anyhow!(
                     "calibration did not converge: {} (rounds in {}, triaxial.json lists them)",
-                    c.failure.as_deref().unwrap_or("unknown"),
+                    why.as_deref().unwrap_or("unknown"),
                     inp.out.display()
                 )));
             }

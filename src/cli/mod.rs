@@ -383,6 +383,14 @@ pub struct TriaxialArgs {
     /// standard error if that is larger.
     #[arg(long, value_name = "DEG", default_value_t = PHI_TOLERANCE)]
     pub tolerance: f64,
+    /// Adjust the material's cohesion until the sample's envelope has this c (Pa); with
+    /// --target-phi, both are adjusted together. Drucker–Prager materials only.
+    #[arg(long, value_name = "PA")]
+    pub target_c: Option<f64>,
+    /// The loop accepts a c within this many pascals of the target, or within its standard
+    /// error if that is larger [default: 5 % of the target, at least 50 Pa].
+    #[arg(long, value_name = "PA")]
+    pub tolerance_c: Option<f64>,
     /// Output folder.
     #[arg(long, value_name = "DIR", default_value = "out/calibrate-triaxial")]
     pub out: PathBuf,
@@ -788,6 +796,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         }
         Command::Calibrate { calibrate: CalibrateCommand::Triaxial(a) } => {
             if a.runner.runner == RunnerArg::Ray {
+                batch::no_loop_on_ray(&a)?;
                 return batch::ray(&a.runner, "calibrate triaxial");
             }
             batch::threads_only(&a.runner)?;
