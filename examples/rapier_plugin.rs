@@ -57,6 +57,7 @@ pub fn drop_sphere(steps: usize) -> Result<Vec<[f64; 3]>, Box<dyn std::error::Er
         region: SoilRegion::Bed { container, surface: Surface::Flat(0.08) },
         material: 0,
         velocity: [0.0; 3],
+        initial_pressure: None,
     };
     let terrain = build_terrain(&container, config.spacing, config.bce_layers, config.gravity, &[bed], &[material64])?;
     // The rapier world: the container's floor and walls, then the sphere.

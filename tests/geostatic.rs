@@ -142,3 +142,43 @@ fn a_bed_under_gravity_tilted_15_degrees_starts_in_the_infinite_slope_state_and_
     assert!(o.max_speed < 0.01 * o.speed_scale, "slides: max speed {:.3e} m/s", o.max_speed);
     assert_eq!(o.escaped, 0, "particles escaped");
 }
+
+#[test]
+fn a_pressurised_block_in_a_closed_box_stays_at_its_pressure_with_its_ocr() {
+    // A clay block filling a container closed by a fixed lid, no gravity, started at 20 kPa
+    // with OCR 3: the walls and the lid hold it, so nothing moves and every particle keeps p = 20 kPa and p_c = 60 kPa
+    // (elastic inside its yield surface). The lid covers the soil's columns only: laid over the
+    // walls' top markers too, it doubled the markers along the edges, an uneven marker density
+    // that a uniform stress pushes against (29 % off p and 0.14 m/s when tried).
+    let text = "[simulation]\nend_time = 0.02\nprecision = \"f64\"\ngravity = [0.0, 0.0, 0.0]\n\n[sph]\nspacing = 0.02\n\n\
+                [[materials]]\nname = \"clay\"\nmodel = \"mcc\"\ndensity = 1800\nyoungs_modulus = 5e6\npoisson_ratio = 0.3\n\
+                mcc_m = 1.2\nmcc_kappa = 0.02\nmcc_lambda = 0.1\nmcc_v_lambda = 2.2\nocr = 3.0\n\n\
+                [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.16, 0.16, 0.16]\n\n\
+                [[soil_blocks]]\nmaterial = \"clay\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.16, 0.16, 0.16]\ninitial_pressure = 2e4\n\n\
+                [[bodies]]\nname = \"lid\"\nshape = { type = \"box\", size = [0.12, 0.12, 0.04] }\nmass = 1.0\nposition = [0.08, 0.08, 0.18]\n\
+                motion = { type = \"prescribed\", linear_velocity = [0.0, 0.0, 0.0] }\n";
+    let scene = common::scene(text);
+    assert!(regolith::scene::describe(&scene).contains("isotropic pressure of 20000 Pa"));
+    let mut sim = regolith::sim::Simulation::<f64>::new(&scene).expect("builds");
+    let pc0: Vec<f64> = sim.system.fluid.states().iter().map(|s| s.pc).collect();
+    assert!(pc0.iter().all(|pc| (pc - 6e4).abs() < 1e-6 * 6e4), "p_c0 = OCR · p: {:?}", &pc0[..3]);
+    let mut max_speed: f64 = 0.0;
+    while sim.time() < scene.end_time - 1e-12 {
+        sim.step().expect("step");
+        let v = sim.system.fluid.velocities().iter().map(|v| v.norm()).fold(0.0, f64::max);
+        max_speed = max_speed.max(v);
+    }
+    let f = &sim.system.fluid;
+    let (mut worst, mut n) = (0.0f64, 0);
+    for (sig, st) in f.stresses().iter().zip(f.states()) {
+        let p = -(sig.xx + sig.yy + sig.zz) / 3.0;
+        worst = worst.max((p - 2e4).abs() / 2e4);
+        assert!((st.pc - 6e4).abs() < 1e-3 * 6e4, "p_c moved to {}", st.pc);
+        n += 1;
+    }
+    eprintln!("{n} particles: largest |p − 20 kPa| {:.3e} of it, max speed {max_speed:.3e} m/s", worst);
+    // An acoustic wave carrying 1 % of p moves the soil at v = 0.01 p / (ρ c) = 2.5e-3 m/s, with
+    // c = 44 m/s from the MCC moduli at 20 kPa (K = v p / κ = 2.2 MPa, ν = 0.3). Measured
+    // (2026-12-03): 0.30 % and 1.1e-3 m/s, the lid's edges being the largest disturbance.
+    assert!(worst < 0.01 && max_speed < 2.5e-3, "p off by {worst:.3e}, speed {max_speed:.3e}");
+}

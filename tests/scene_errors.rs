@@ -282,6 +282,12 @@ case!(
     "{}:22: key `soil_blocks[0].shape`: the block [[0.0, 0.0, 0.0] .. [0.6, 0.2, 0.2]] must lie inside the container [[0.0, 0.0, 0.0] .. [0.4, 0.4, 0.5]]"
 );
 case!(
+    block_with_a_tension,
+    "[terrain]\nmaterial = \"sand\"\ndepth = 0.2\n",
+    "[[soil_blocks]]\nmaterial = \"sand\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.2, 0.2, 0.2]\ninitial_pressure = -5.0\n",
+    "{}:25: key `soil_blocks[0].initial_pressure`: must be a compression > 0 Pa (got -5); leave it out for the geostatic state"
+);
+case!(
     cylinder_without_radius,
     "[terrain]\nmaterial = \"sand\"\ndepth = 0.2\n",
     "[[soil_blocks]]\nmaterial = \"sand\"\nshape = \"cylinder\"\nbase_center = [0.2, 0.2, 0.0]\nheight = 0.1\n",

@@ -164,7 +164,12 @@ pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, Terrai
     let regions: Vec<RegionSpec> = scene
         .soil
         .iter()
-        .map(|s| RegionSpec { region: s.region.clone(), material: s.material as u16, velocity: s.velocity })
+        .map(|s| RegionSpec {
+            region: s.region.clone(),
+            material: s.material as u16,
+            velocity: s.velocity,
+            initial_pressure: s.initial_pressure,
+        })
         .collect();
     let terrain = build_terrain(
         &container,

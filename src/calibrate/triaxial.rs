@@ -204,9 +204,18 @@ impl TriaxialSettings {
     }
 }
 
-/// The scene of one test: the material (renamed "soil"), the sample and the six plates, no
-/// gravity, in an open container.
-pub fn scene_text(material: &toml::Table, s: &TriaxialSettings, end_time: f64) -> Result<String, CommandError> {
+/// The scene of one test at confining stress `sigma0`: the material (renamed "soil"), the
+/// sample and the six plates, no gravity, in an open container. A Modified Cam Clay sample
+/// starts consolidated at `sigma0` (`initial_pressure`), so that its preconsolidation is `ocr`
+/// times the confining stress as in a lab test; from zero stress it would consolidate along
+/// its normal compression line and be normally consolidated whatever its OCR. Other models
+/// start stress-free (their state does not remember a consolidation).
+pub fn scene_text(
+    material: &toml::Table,
+    s: &TriaxialSettings,
+    sigma0: f64,
+    end_time: f64,
+) -> Result<String, CommandError> {
     let d0 = s.spacing;
     // Whole spacings across, and a lattice offset by half a spacing so that particle centres
     // lie symmetric about the origin, d0/2 inside the faces.
@@ -240,7 +249,7 @@ pub fn scene_text(material: &toml::Table, s: &TriaxialSettings, end_time: f64) -
          material = \"soil\"\n\
          shape = \"box\"\n\
          min = [{lx}, {lx}, {lz}]\n\
-         max = [{hx}, {hx}, {hz}]\n",
+         max = [{hx}, {hx}, {hz}]\n{pressure}",
         prec = s.precision.name(),
         mx = -bx,
         mz = -bz,
@@ -248,6 +257,11 @@ pub fn scene_text(material: &toml::Table, s: &TriaxialSettings, end_time: f64) -
         lz = -0.5 * h,
         hx = 0.5 * w,
         hz = 0.5 * h,
+        pressure = if material.get("model").and_then(|v| v.as_str()) == Some("mcc") {
+            format!("initial_pressure = {sigma0:e}\n")
+        } else {
+            String::new()
+        },
     );
     let dims = [w, w, h];
     for (name, axis, sign) in PLATES {
@@ -353,7 +367,7 @@ pub fn run_test(
     // The scene's end time only bounds the run; the servo loop decides when it stops.
     let end = 1e3;
     let path = dir.join("scene.toml");
-    let text = scene_text(material, s, end)?;
+    let text = scene_text(material, s, sigma0, end)?;
     std::fs::write(&path, text).map_err(|e| CommandError::Output(format!("cannot write {}: {e}", path.display())))?;
     let scene = load_scene(&path, &[])?;
     let mut test = match s.precision {

@@ -168,6 +168,7 @@ pub(crate) struct SoilBlockFile {
     pub radius: Option<f64>,
     pub height: Option<f64>,
     pub velocity: Option<[f64; 3]>,
+    pub initial_pressure: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]

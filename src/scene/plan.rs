@@ -133,8 +133,14 @@ pub fn describe(scene: &Scene) -> String {
         let (lo, hi) = region_bounds(&spec.region);
         let _ = writeln!(
             s,
-            "  soil {}: \"{}\" in [{:?} .. {:?}], about {:.0} particles",
-            spec.key, scene.materials[spec.material].name, lo, hi, n
+            "  soil {}: \"{}\" in [{:?} .. {:?}], about {:.0} particles{}",
+            spec.key,
+            scene.materials[spec.material].name,
+            lo,
+            hi,
+            n,
+            spec.initial_pressure
+                .map_or(String::new(), |p| format!(", starting at an isotropic pressure of {p} Pa (not geostatic)"))
         );
     }
     let mut walls = 0.0;

@@ -134,6 +134,7 @@ pub(super) fn resolve_soil(
             region: SoilRegion::Bed { container: c, surface },
             key: "terrain".into(),
             velocity: [0.0; 3],
+            initial_pressure: None,
         });
     }
     for (i, b) in file.soil_blocks.iter().enumerate() {
@@ -207,7 +208,17 @@ pub(super) fn resolve_soil(
         if velocity.iter().any(|v| !v.is_finite()) {
             return Err(e(&k("velocity"), "must be finite [vx, vy, vz] in m/s".into()));
         }
-        soil.push(SoilSpec { material, region, key: format!("soil_blocks[{i}]"), velocity });
+        let initial_pressure = match b.initial_pressure {
+            None => None,
+            Some(p) if p.is_finite() && p > 0.0 => Some(p),
+            Some(p) => {
+                return Err(e(
+                    &k("initial_pressure"),
+                    format!("must be a compression > 0 Pa (got {p}); leave it out for the geostatic state"),
+                ));
+            }
+        };
+        soil.push(SoilSpec { material, region, key: format!("soil_blocks[{i}]"), velocity, initial_pressure });
     }
     if soil.is_empty() {
         return Err(InputError::file(path, "the scene has no soil: add [terrain] or [[soil_blocks]]"));

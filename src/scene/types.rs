@@ -63,6 +63,10 @@ pub struct SoilSpec {
     pub key: String,
     /// Initial velocity of its particles (m/s; `soil_blocks[i].velocity`, the bed starts at rest).
     pub velocity: [f64; 3],
+    /// Isotropic compression the particles start with in place of the geostatic state (Pa;
+    /// `soil_blocks[i].initial_pressure`): a sample consolidated before the run, whose MCC
+    /// preconsolidation is `ocr` times it. The walls or bodies around it must hold it.
+    pub initial_pressure: Option<f64>,
 }
 
 /// A body of a scene.

@@ -31,6 +31,9 @@ pub struct RegionSpec {
     pub material: u16,
     /// Initial velocity of its particles (m/s).
     pub velocity: [f64; 3],
+    /// Isotropic compression its particles start with (Pa) in place of the geostatic state;
+    /// `None`: geostatic. MCC points get `p_c0 = OCR · p` and their specific volume at `p`.
+    pub initial_pressure: Option<f64>,
 }
 
 /// Everything the solver is built from.
@@ -188,17 +191,22 @@ pub fn build_terrain(
             let half = mat.density * 0.5 * d0;
             let column = above + half;
             above += 2.0 * half;
-            let sv = column * gravity[2];
-            let (sxz, syz) = (-column * gravity[0], -column * gravity[1]);
-            let sh = mat.k0() * sv;
-            let p0 = -(sv + 2.0 * sh) / 3.0;
+            let (sigma, p0) = match regions[r].initial_pressure {
+                Some(p) => ([-p, -p, -p, 0.0, 0.0, 0.0], p),
+                None => {
+                    let sv = column * gravity[2];
+                    let (sxz, syz) = (-column * gravity[0], -column * gravity[1]);
+                    let sh = mat.k0() * sv;
+                    ([sh, sh, sv, 0.0, sxz, syz], -(sv + 2.0 * sh) / 3.0)
+                }
+            };
             let st = mat.initial_state(p0);
             particles.push(ParticleInit {
                 pos: lat.point([i, j, k]),
                 vel: regions[r].velocity,
                 rho: mat.density,
                 mass: mat.density * d0 * d0 * d0,
-                sigma: [sh, sh, sv, 0.0, sxz, syz],
+                sigma,
                 pc: if matches!(mat.rheology, Rheology::Mcc(_)) { st.pc } else { 0.0 },
                 specific_volume: st.v,
                 material: m,
@@ -251,6 +259,7 @@ mod tests {
             region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) },
             material: 0,
             velocity: [0.0; 3],
+            initial_pressure: None,
         };
         (c, [bed])
     }
@@ -296,6 +305,7 @@ mod tests {
             region: SoilRegion::Cylinder { base_center: [0.3, 0.3, 0.0], radius: 0.1, height: 0.1 },
             material: 0,
             velocity: [0.0; 3],
+            initial_pressure: None,
         }];
         let b = build_terrain(&c, 0.005, 3, [0.0, 0.0, -9.81], &regions, &[dp()]).expect("builds");
         let expect = std::f64::consts::PI * 0.01 * 0.1 / 0.005f64.powi(3);
@@ -311,11 +321,13 @@ mod tests {
             region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) },
             material: 0,
             velocity: [0.0; 3],
+            initial_pressure: None,
         };
         let block = |z0: f64| RegionSpec {
             region: SoilRegion::Block(Aabb { min: [0.0, 0.0, z0], max: [0.05, 0.05, 0.2] }),
             material: 0,
             velocity: [2.0, 0.0, -1.0],
+            initial_pressure: None,
         };
         let err =
             build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &[bed.clone(), block(0.09)], &[dp()]).expect_err("overlap");
@@ -344,11 +356,13 @@ mod tests {
                 region: SoilRegion::Block(Aabb { min: [0.0, 0.0, 0.1], max: [0.1, 0.1, 0.2] }),
                 material: 1,
                 velocity: [0.0; 3],
+                initial_pressure: None,
             },
             RegionSpec {
                 region: SoilRegion::Bed { container: c, surface: Surface::Flat(0.1) },
                 material: 0,
                 velocity: [0.0; 3],
+                initial_pressure: None,
             },
         ];
         let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &regions, &[heavy, light]).expect("builds");
@@ -378,9 +392,47 @@ mod tests {
             region: SoilRegion::Block(Aabb { min: [0.0; 3], max: [0.1, 0.1, 0.05] }),
             material: 0,
             velocity: [0.0; 3],
+            initial_pressure: None,
         }];
         let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &regions, &[dp()]).expect("builds");
         assert_eq!(b.notes.len(), 1);
         assert!((b.container.max[0] - 0.2).abs() < 1e-12 || (b.container.max[0] - 0.21).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_pressurised_block_starts_isotropic_with_its_ocr() {
+        let clay = MaterialParams {
+            model: Some(regolith_fsi::rheology::ModelKind::Mcc),
+            density: Some(1800.0),
+            youngs_modulus: Some(5e6),
+            poisson_ratio: Some(0.3),
+            mcc_m: Some(1.2),
+            mcc_lambda: Some(0.1),
+            mcc_kappa: Some(0.02),
+            mcc_v_lambda: Some(2.2),
+            ocr: Some(3.0),
+            ..Default::default()
+        }
+        .build()
+        .expect("valid");
+        let c = Aabb { min: [0.0; 3], max: [0.1, 0.1, 0.1] };
+        let block = |p| RegionSpec {
+            region: SoilRegion::Block(Aabb { min: [0.0; 3], max: [0.05, 0.05, 0.05] }),
+            material: 0,
+            velocity: [0.0; 3],
+            initial_pressure: p,
+        };
+        // Gravity is ignored for a pressurised block: every particle holds −p I.
+        let b = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &[block(Some(2e4))], std::slice::from_ref(&clay))
+            .expect("builds");
+        let expect = clay.initial_state(2e4);
+        assert!(expect.pc > 5.9e4 && expect.pc < 6.1e4, "p_c0 = OCR p = 6e4 Pa: {}", expect.pc);
+        for q in &b.particles {
+            assert_eq!(q.sigma, [-2e4, -2e4, -2e4, 0.0, 0.0, 0.0]);
+            assert_eq!((q.pc, q.specific_volume), (expect.pc, expect.v));
+        }
+        // Without it: geostatic, p_c0 from the (small) overburden.
+        let g = build_terrain(&c, 0.01, 3, [0.0, 0.0, -9.81], &[block(None)], &[clay]).expect("builds");
+        assert!(g.particles.iter().all(|q| q.sigma[2] < 0.0 && q.sigma[2] > -1e3 && q.pc < 1e4));
     }
 }
