@@ -170,7 +170,9 @@ const WHEELS: [&str; 4] = ["wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr"];
 
 #[test]
 fn a_rover_at_rest_on_the_soil_is_carried_by_its_weight_and_does_not_tunnel() {
-    let scene = rover_scene(0.4, "");
+    // 0.3 s (sized for CI): measured, the mean force over 0.15–0.3 s is within 0.03 % of the
+    // weight and the sinkage moves 0.01 mm between 0.2 and 0.3 s.
+    let scene = rover_scene(0.3, "");
     let mut sim = Simulation::<f32>::new(&scene).expect("builds");
     let links: Vec<Body> =
         scene.vehicles[0].model.links.iter().map(|l| sim.body(&format!("rover/{}", l.name)).expect("link")).collect();
@@ -179,11 +181,11 @@ fn a_rover_at_rest_on_the_soil_is_carried_by_its_weight_and_does_not_tunnel() {
     let mut sink_at = Vec::new();
     while sim.time() < scene.end_time - 1e-9 {
         sim.step().expect("step");
-        if sim.time() > 0.2 {
+        if sim.time() > 0.15 {
             sum += links.iter().map(|b| sim.fsi_wrench(*b).force[2]).sum::<f64>();
             n += 1.0;
         }
-        if (sim.time() - 0.3).abs() < 5e-4 || sim.time() > scene.end_time - 5e-4 {
+        if (sim.time() - 0.2).abs() < 5e-4 || sim.time() > scene.end_time - 5e-4 {
             sink_at.push(sim.wheel_states(0).iter().map(|w| w.sinkage).sum::<f64>() / 4.0);
         }
     }
@@ -195,7 +197,7 @@ fn a_rover_at_rest_on_the_soil_is_carried_by_its_weight_and_does_not_tunnel() {
     assert!((mean - weight).abs() < 0.05 * weight, "FSI {mean} N vs weight {weight} N");
     // Sinkage: small (under a third of the wheel radius) and steady over the last 0.1 s.
     let d0 = scene.solver.spacing;
-    eprintln!("mean wheel sinkage at 0.3 s and 0.4 s: {sink_at:?} m");
+    eprintln!("mean wheel sinkage at 0.2 s and 0.3 s: {sink_at:?} m");
     assert!(sink_at.iter().all(|s| s.abs() < 0.07 / 3.0), "sinkage {sink_at:?}");
     assert!((sink_at[1] - sink_at[0]).abs() < 0.25 * d0, "still sinking: {sink_at:?}");
     // No tunnelling: every wheel stays above the floor and no soil particle is inside a wheel.
