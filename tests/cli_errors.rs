@@ -297,6 +297,10 @@ fn calibrate_triaxial_flags_and_materials_are_checked_before_running() {
         &["calibrate", "triaxial", "--material", sand, "--target-phi", "30", "--confining", "5e3,1e4", "--out", &o],
         "--confining: --target-phi needs at least three confining stresses",
     );
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--servo-crossings", "0", "--out", &o],
+        "--servo-crossings",
+    );
     // --target-c: a cohesion ≥ 0, a tolerance > 0, three tests, a Drucker–Prager material, and
     // not on Ray (its rounds depend on each other).
     assert_one_line_error(&["calibrate", "triaxial", "--material", sand, "--target-c=-5", "--out", &o], "--target-c");

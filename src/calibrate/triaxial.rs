@@ -118,9 +118,10 @@ pub fn default_confining() -> Vec<f64> {
 
 impl TriaxialSettings {
     /// The defaults for a sample `width` wide: twice as high, d0 = width / 10, AGX's ten
-    /// confining stresses, axial strain rate 0.5 /s to 10 % strain, servo τ = 10 P-wave
-    /// crossings, 1 % consolidation tolerance, a 4th-order filter keeping wavelengths of 1 %
-    /// strain and more, peaks above 1.25 σ0 (AGX's filter order and ratio).
+    /// confining stresses, axial strain rate 0.2 /s to 10 % strain, servo τ =
+    /// [`SERVO_CROSSINGS`] P-wave crossings, 1 % consolidation tolerance, a 4th-order filter
+    /// keeping wavelengths of 1 % strain and more, peaks above 1.25 σ0 (AGX's filter order and
+    /// ratio).
     pub fn for_width(width: f64) -> Self {
         Self {
             width,
@@ -130,7 +131,7 @@ impl TriaxialSettings {
             strain_rate: 0.2,
             max_strain: 0.1,
             tolerance: 0.01,
-            servo_crossings: 3.0,
+            servo_crossings: SERVO_CROSSINGS,
             failure: FailureRule::Peak,
             filter_order: 4,
             filter_wavelength: 0.01,
@@ -653,6 +654,10 @@ pub struct TriaxialInputs {
     /// [`C_TOLERANCE_MIN`].
     pub tolerance_c: Option<f64>,
 }
+
+/// Default time constant of the plates' servo, in P-wave crossings of the sample's longest
+/// side.
+pub const SERVO_CROSSINGS: f64 = 3.0;
 
 /// Default smallest tolerance of the φ loop (degrees).
 pub const PHI_TOLERANCE: f64 = 0.5;

@@ -40,6 +40,7 @@ impl TriaxialArgs {
         };
         s.filter_order = self.filter_order;
         s.filter_wavelength = self.filter_wavelength;
+        s.servo_crossings = self.servo_crossings;
         s.precision = match self.precision {
             Precision::F32 => crate::scene::Precision::F32,
             Precision::F64 => crate::scene::Precision::F64,

@@ -16,7 +16,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::calibrate::repose::{ANGLE_TOLERANCE, ReposeSettings};
-use crate::calibrate::triaxial::PHI_TOLERANCE;
+use crate::calibrate::triaxial::{PHI_TOLERANCE, SERVO_CROSSINGS};
 use crate::input::InputError;
 
 /// Why a command failed.
@@ -372,6 +372,10 @@ pub struct TriaxialArgs {
     /// Shortest wavelength the filter keeps (axial strain).
     #[arg(long, value_name = "STRAIN", default_value_t = 0.01)]
     pub filter_wavelength: f64,
+    /// Time constant of the plates' servo, in P-wave crossings of the sample's longest side
+    /// (smaller: stiffer; the lateral stress lags a yielding sample less).
+    #[arg(long, value_name = "N", default_value_t = SERVO_CROSSINGS)]
+    pub servo_crossings: f64,
     /// Floating-point precision of the runs.
     #[arg(long, value_enum, default_value = "f32")]
     pub precision: Precision,
