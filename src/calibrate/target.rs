@@ -160,25 +160,25 @@ pub fn calibrate_to_target<E>(
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct JointIterate {
     /// Parameter values tried, in the order of [`JointRun::parameters`].
-    pub parameters: Vec<f64>,
+    pub parameters: [f64; 2],
     /// What the test measured, one per target.
-    pub measured: Vec<f64>,
+    pub measured: [f64; 2],
     /// Their uncertainties (standard errors).
-    pub uncertainty: Vec<f64>,
+    pub uncertainty: [f64; 2],
 }
 
-/// The joint loop's settings: one target per parameter, the i-th measurement steered mainly by
-/// the i-th parameter (a test's c and φ both move with the material's c and φ).
+/// The joint loop's settings: two parameters, one target each, the i-th measurement steered
+/// mainly by the i-th parameter (a test's c and φ both move with the material's c and φ).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct JointSettings {
     /// Parameter names (material keys), for the record and the errors.
-    pub parameters: Vec<String>,
+    pub parameters: [&'static str; 2],
     /// The values the test should measure.
-    pub target: Vec<f64>,
+    pub target: [f64; 2],
     /// Smallest tolerance of each, whatever the measurement's uncertainty.
-    pub tolerance_floor: Vec<f64>,
+    pub tolerance_floor: [f64; 2],
     /// Allowed range of each parameter (inclusive).
-    pub range: Vec<(f64, f64)>,
+    pub range: [(f64, f64); 2],
     /// Most evaluations.
     pub max_evaluations: usize,
 }
@@ -187,11 +187,11 @@ pub struct JointSettings {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct JointRun {
     /// Parameter names.
-    pub parameters: Vec<String>,
+    pub parameters: [&'static str; 2],
     /// Every evaluation, in order.
     pub iterates: Vec<JointIterate>,
     /// The accepted parameters, if every target was met at once.
-    pub converged: Option<Vec<f64>>,
+    pub converged: Option<[f64; 2]>,
     /// Why not, otherwise.
     pub failure: Option<String>,
 }
@@ -206,34 +206,29 @@ pub struct JointRun {
 /// stops naming the parameter; a Jacobian that cannot be inverted stops as flat.
 pub fn calibrate_jointly<E>(
     s: &JointSettings,
-    start: &[f64],
-    mut eval: impl FnMut(&[f64]) -> Result<(Vec<f64>, Vec<f64>), E>,
+    start: [f64; 2],
+    mut eval: impl FnMut([f64; 2]) -> Result<([f64; 2], [f64; 2]), E>,
 ) -> Result<JointRun, E> {
-    let n = start.len();
-    assert!(
-        n == 2 && s.target.len() == n && s.tolerance_floor.len() == n && s.range.len() == n && s.parameters.len() == n,
-        "the joint loop steers two parameters"
-    );
-    let mut run = JointRun { parameters: s.parameters.clone(), iterates: Vec::new(), converged: None, failure: None };
+    let mut run = JointRun { parameters: s.parameters, iterates: Vec::new(), converged: None, failure: None };
     // Scaled coordinates: parameter / floor, measurement / floor.
-    let sc = |v: &[f64]| -> [f64; 2] { [v[0] / s.tolerance_floor[0], v[1] / s.tolerance_floor[1]] };
+    let sc = |v: [f64; 2]| -> [f64; 2] { [v[0] / s.tolerance_floor[0], v[1] / s.tolerance_floor[1]] };
     let mut jac = [[1.0, 0.0], [0.0, 1.0]];
-    let mut x = [start[0], start[1]];
+    let mut x = start;
     let mut prev: Option<([f64; 2], [f64; 2])> = None;
     let mut edge_tried = [false; 2];
     loop {
-        let (m, u) = eval(&x)?;
-        run.iterates.push(JointIterate { parameters: x.to_vec(), measured: m.clone(), uncertainty: u.clone() });
+        let (m, u) = eval(x)?;
+        run.iterates.push(JointIterate { parameters: x, measured: m, uncertainty: u });
         let within = (0..2).all(|i| (m[i] - s.target[i]).abs() <= u[i].max(s.tolerance_floor[i]));
         if within {
-            run.converged = Some(x.to_vec());
+            run.converged = Some(x);
             return Ok(run);
         }
         if run.iterates.len() >= s.max_evaluations {
             run.failure = Some(TargetError::Exhausted(run.iterates.len()).to_string());
             return Ok(run);
         }
-        let (xs, ms) = (sc(&x), sc(&m));
+        let (xs, ms) = (sc(x), sc(m));
         if let Some((px, pm)) = prev {
             let dx = [xs[0] - px[0], xs[1] - px[1]];
             let dm = [ms[0] - pm[0], ms[1] - pm[1]];
@@ -253,8 +248,7 @@ pub fn calibrate_jointly<E>(
             let p = &run.iterates[run.iterates.len() - 2];
             run.failure = Some(format!(
                 "the measurements did not change independently between {:?} and {:?}: the loop cannot steer",
-                p.parameters,
-                x.to_vec()
+                p.parameters, x
             ));
             return Ok(run);
         }
@@ -346,10 +340,10 @@ mod tests {
 
     fn joint(target: [f64; 2]) -> JointSettings {
         JointSettings {
-            parameters: vec!["friction_angle".into(), "cohesion".into()],
-            target: target.to_vec(),
-            tolerance_floor: vec![0.5, 100.0],
-            range: vec![(1.0, 60.0), (0.0, 1e6)],
+            parameters: ["friction_angle", "cohesion"],
+            target,
+            tolerance_floor: [0.5, 100.0],
+            range: [(1.0, 60.0), (0.0, 1e6)],
             max_evaluations: 8,
         }
     }
@@ -357,16 +351,16 @@ mod tests {
     /// A sample whose φ reads 2° low and whose c reads 20 % low plus 40 Pa per degree of φ
     /// (coupled, as an envelope fitted over a few circles is): linear, so Broyden's method
     /// lands in a few steps.
-    fn coupled(p: &[f64]) -> Vec<f64> {
-        vec![p[0] - 2.0 + 0.0002 * p[1], 0.8 * p[1] + 40.0 * (p[0] - 30.0)]
+    fn coupled(p: [f64; 2]) -> [f64; 2] {
+        [p[0] - 2.0 + 0.0002 * p[1], 0.8 * p[1] + 40.0 * (p[0] - 30.0)]
     }
 
     #[test]
     fn the_joint_loop_meets_both_targets_of_a_coupled_response() {
-        let r = calibrate_jointly::<()>(&joint([35.0, 2000.0]), &[35.0, 2000.0], |p| Ok((coupled(p), vec![0.3, 80.0])))
-            .unwrap();
-        let c = r.converged.clone().unwrap_or_else(|| panic!("{r:?}"));
-        let m = coupled(&c);
+        let r =
+            calibrate_jointly::<()>(&joint([35.0, 2000.0]), [35.0, 2000.0], |p| Ok((coupled(p), [0.3, 80.0]))).unwrap();
+        let c = r.converged.unwrap_or_else(|| panic!("{r:?}"));
+        let m = coupled(c);
         assert!((m[0] - 35.0).abs() <= 0.5 && (m[1] - 2000.0).abs() <= 100.0, "{r:?}");
         assert!(r.iterates.len() <= 5, "{} evaluations: {r:?}", r.iterates.len());
     }
@@ -374,8 +368,8 @@ mod tests {
     #[test]
     fn the_joint_loop_names_the_parameter_it_cannot_reach_and_stops_when_flat() {
         // A cohesion the sample can only reach with a negative one.
-        let r = calibrate_jointly::<()>(&joint([30.0, 10.0]), &[30.0, 1000.0], |p| {
-            Ok((vec![p[0], 0.5 * p[1] + 300.0], vec![0.3, 10.0]))
+        let r = calibrate_jointly::<()>(&joint([30.0, 10.0]), [30.0, 1000.0], |p| {
+            Ok(([p[0], 0.5 * p[1] + 300.0], [0.3, 10.0]))
         })
         .unwrap();
         assert!(r.converged.is_none());
@@ -383,10 +377,8 @@ mod tests {
         let f = r.failure.unwrap();
         assert!(f.starts_with("cohesion: the target 10 needs a parameter outside [0, 1000000]"), "{f}");
         // The measured c does not follow the typed one: no step can be taken.
-        let r = calibrate_jointly::<()>(&joint([30.0, 2000.0]), &[30.0, 1000.0], |p| {
-            Ok((vec![p[0], 500.0], vec![0.3, 10.0]))
-        })
-        .unwrap();
+        let r = calibrate_jointly::<()>(&joint([30.0, 2000.0]), [30.0, 1000.0], |p| Ok(([p[0], 500.0], [0.3, 10.0])))
+            .unwrap();
         assert!(r.failure.is_some_and(|f| f.contains("cannot steer")));
     }
 }

@@ -258,11 +258,8 @@ pub fn scene_text(
         lz = -0.5 * h,
         hx = 0.5 * w,
         hz = 0.5 * h,
-        pressure = if material.get("model").and_then(|v| v.as_str()) == Some("mcc") {
-            format!("initial_pressure = {sigma0:e}\n")
-        } else {
-            String::new()
-        },
+        pressure =
+            if model(material) == Some("mcc") { format!("initial_pressure = {sigma0:e}\n") } else { String::new() },
     );
     let dims = [w, w, h];
     for (name, axis, sign) in PLATES {
@@ -351,7 +348,7 @@ pub struct TriaxialTest {
 /// Clay (it hardens or softens towards it), the first peak otherwise.
 pub fn default_rule(material: &Path) -> Result<FailureRule, InputError> {
     let m = material_table(material)?;
-    Ok(match m.get("model").and_then(|v| v.as_str()) {
+    Ok(match model(&m) {
         Some("mcc") => FailureRule::Plateau,
         _ => FailureRule::Peak,
     })
@@ -744,6 +741,11 @@ pub struct FilterReport {
     pub failure_rule: FailureRule,
 }
 
+/// The material's `model` key.
+fn model(m: &toml::Table) -> Option<&str> {
+    m.get("model").and_then(|v| v.as_str())
+}
+
 fn number(m: &toml::Table, key: &str) -> Option<f64> {
     m.get(key).and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
 }
@@ -908,7 +910,7 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
     let material = material_table(&inp.material)?;
     if inp.target_phi.is_none() && inp.target_c.is_none() {
         let (tests, fit) = run_all(&material, s, &inp.out, inp.jobs, inp.resume)?;
-        return report(inp, &inp.out, &material, tests, fit, Calibration::None);
+        return report(inp, &inp.out, &material, tests, fit, Calibration::None, None);
     }
     let targets = Targets::check(inp, &material)?;
     // One round: the tests of one material in `iteration_<k>/`.
@@ -942,15 +944,15 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
     let (calibration, written) = match targets {
         Targets::Joint { phi, c, tolerance_c, start } => {
             let settings = JointSettings {
-                parameters: vec!["friction_angle".into(), "cohesion".into()],
-                target: vec![phi, c],
-                tolerance_floor: vec![inp.tolerance_phi, tolerance_c],
-                range: vec![super::repose::PHI_RANGE, C_RANGE],
+                parameters: ["friction_angle", "cohesion"],
+                target: [phi, c],
+                tolerance_floor: [inp.tolerance_phi, tolerance_c],
+                range: [super::repose::PHI_RANGE, C_RANGE],
                 max_evaluations: super::repose::MAX_EVALUATIONS,
             };
-            let run = calibrate_jointly(&settings, &start, |p| {
+            let run = calibrate_jointly(&settings, start, |p| {
                 let fit = round(&[("friction_angle", p[0]), ("cohesion", p[1])])?;
-                Ok::<_, CommandError>((vec![fit.phi, fit.c], vec![fit.se_phi.unwrap_or(0.0), fit.se_c.unwrap_or(0.0)]))
+                Ok::<_, CommandError>(([fit.phi, fit.c], [fit.se_phi.unwrap_or(0.0), fit.se_c.unwrap_or(0.0)]))
             })?;
             let written = match &run.converged {
                 Some(p) => Some(write_calibrated(
@@ -995,7 +997,7 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
     let Some((m, tests, fit, dir)) = last else {
         return Err(CommandError::Run(format!("{}: the calibration loop ran no test", inp.material.display())));
     };
-    report(inp, &dir, &m, tests, fit, calibration.with(written))
+    report(inp, &dir, &m, tests, fit, calibration, written)
 }
 
 /// What a calibration asks for, checked.
@@ -1062,7 +1064,7 @@ impl Targets {
         if !(tolerance_c.is_finite() && tolerance_c > 0.0) {
             return Err(InputError::flag("--tolerance-c", format!("must be > 0 Pa (got {tolerance_c})")).into());
         }
-        let model = material.get("model").and_then(|v| v.as_str()).unwrap_or("");
+        let model = model(material).unwrap_or("");
         if model != "drucker-prager" {
             return Err(InputError::key(
                 &inp.material,
@@ -1087,28 +1089,13 @@ enum Calibration {
     Joint(JointRun),
 }
 
-/// A calibration and the material file it wrote.
-struct Calibrated(Calibration, Option<String>);
-
-impl Calibration {
-    fn with(self, written: Option<String>) -> Calibrated {
-        Calibrated(self, written)
-    }
-}
-
-impl From<Calibration> for Calibrated {
-    fn from(c: Calibration) -> Self {
-        Calibrated(c, None)
-    }
-}
-
 /// The envelope of tests already run and recorded in `inp.out` (by the Ray runner, say):
 /// fits it and writes `triaxial.json` and the Mohr-circle plot, as [`calibrate_triaxial`] does
 /// after running them. A test without a finished record is an error naming it.
 pub fn envelope_of_recorded(inp: &TriaxialInputs) -> Result<TriaxialReport, CommandError> {
     let material = material_table(&inp.material)?;
     let (tests, fit) = TriaxialPlan::new(&material, &inp.settings, &inp.out)?.finish()?;
-    report(inp, &inp.out, &material, tests, fit, Calibration::None)
+    report(inp, &inp.out, &material, tests, fit, Calibration::None, None)
 }
 
 fn report(
@@ -1117,9 +1104,9 @@ fn report(
     material: &toml::Table,
     tests: Vec<TriaxialTest>,
     fit: MohrCoulomb,
-    calibration: impl Into<Calibrated>,
+    calibration: Calibration,
+    calibrated_material: Option<String>,
 ) -> Result<TriaxialReport, CommandError> {
-    let Calibrated(calibration, calibrated_material) = calibration.into();
     let (calibration, calibration_parameter, joint_calibration) = match calibration {
         Calibration::None => (None, None, None),
         Calibration::One(key, run) => (Some(run), Some(key), None),

@@ -132,7 +132,7 @@ pub(super) fn triaxial(inp: TriaxialInputs) -> Result<(), Failure> {
             c.failure.clone(),
         )),
         (None, Some(j)) => Some((
-            j.converged.as_ref().map(|v| {
+            j.converged.map(|v| {
                 j.parameters.iter().zip(v).map(|(k, x)| format!("{k} = {x:.4}")).collect::<Vec<_>>().join(", ")
             }),
             j.iterates.len(),
