@@ -246,6 +246,9 @@ struct Point<T> {
 /// Runs an element test on a material in precision `T`.
 pub fn run_element<T: Real>(material: &Material<T>, spec: &ElementSpec) -> Result<ElementPath, ElementError> {
     spec.validate()?;
+    if material.is_water() {
+        return Err(spec_err("--material", "is water: element tests take a soil (elastic, drucker-prager or mcc)"));
+    }
     let mut material = *material;
     let is_mcc = matches!(material.rheology, Rheology::Mcc(_));
     if let Some(ocr) = spec.ocr {
@@ -329,7 +332,7 @@ pub fn run_element<T: Real>(material: &Material<T>, spec: &ElementSpec) -> Resul
             let (mu, _) = cone_from_mohr_coulomb(material.friction_angle_deg.as_f64(), 0.0);
             (None, Some(mu * 3f64.sqrt()))
         }
-        Rheology::Elastic => (None, None),
+        Rheology::Elastic | Rheology::Water(_) => (None, None),
     };
     Ok(ElementPath {
         test: spec.test.name(),

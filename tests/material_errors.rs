@@ -96,19 +96,19 @@ case!(
     unknown_key,
     MCC,
     [("densty", Some("densty = 1700.0"))],
-    "{}:10: key `densty`: unknown field `densty`, expected one of `name`, `file`, `model`, `density`, `youngs_modulus`, `poisson_ratio`, `friction_angle`, `cohesion`, `mu_i_friction_angle`, `mu_i_i0`, `grain_diameter`, `grain_density`, `mcc_m`, `mcc_kappa`, `mcc_lambda`, `mcc_cr`, `mcc_cc`, `mcc_v_lambda`, `ocr`, `mcc_clamp_moduli`, `mcc_pc_floor` (unknown keys are errors so that nothing is silently ignored)"
+    "{}:10: key `densty`: unknown field `densty`, expected one of `name`, `file`, `model`, `density`, `youngs_modulus`, `poisson_ratio`, `friction_angle`, `cohesion`, `mu_i_friction_angle`, `mu_i_i0`, `grain_diameter`, `grain_density`, `permeability`, `sound_speed`, `viscosity`, `mcc_m`, `mcc_kappa`, `mcc_lambda`, `mcc_cr`, `mcc_cc`, `mcc_v_lambda`, `ocr`, `mcc_clamp_moduli`, `mcc_pc_floor` (unknown keys are errors so that nothing is silently ignored)"
 );
 case!(
     unknown_model,
     MCC,
     [("model", Some("model = \"cam-clay\""))],
-    "{}:1: key `model`: unknown variant `cam-clay`, expected one of `elastic`, `drucker-prager`, `mcc`"
+    "{}:1: key `model`: unknown variant `cam-clay`, expected one of `elastic`, `drucker-prager`, `mcc`, `water`"
 );
 case!(
     missing_model,
     MCC,
     [("model", None)],
-    "{}: key `model`: is required: one of \"elastic\", \"drucker-prager\", \"mcc\""
+    "{}: key `model`: is required: one of \"elastic\", \"drucker-prager\", \"mcc\", \"water\""
 );
 case!(
     density_not_positive,
@@ -233,4 +233,66 @@ case!(
     DP,
     [("file", Some("file = \"other.toml\""))],
     "{}:7: key `file`: is only allowed in a scene's [[materials]] entry"
+);
+
+const WATER: &str = "model = \"water\"
+density = 1000.0
+sound_speed = 50.0
+viscosity = 1e-3
+";
+
+#[test]
+fn water_and_wet_soils_load() {
+    load_material_file(&write("ok_water", WATER)).expect("water ok");
+    load_material_file(&write("ok_wet", &format!("{DP}permeability = 1e-4\ngrain_density = 2650.0\n")))
+        .expect("wet soil ok");
+}
+
+case!(
+    water_soil_key,
+    WATER,
+    [("youngs_modulus", Some("youngs_modulus = 1e7"))],
+    "{}:5: key `youngs_modulus`: does not apply to model \"water\" (it is a soil key; give it to the soil the water flows through)"
+);
+case!(
+    water_sound_speed_missing,
+    WATER,
+    [("sound_speed", None)],
+    "{}: key `sound_speed`: is required for model \"water\""
+);
+case!(
+    water_viscosity_negative,
+    WATER,
+    [("viscosity", Some("viscosity = -1.0"))],
+    "{}:4: key `viscosity`: must be ≥ 0 Pa s (water at 20 °C: 1.0e-3; got -1)"
+);
+case!(
+    soil_sound_speed,
+    DP,
+    [("sound_speed", Some("sound_speed = 50.0"))],
+    "{}:7: key `sound_speed`: does not apply to model \"drucker-prager\" (it is a water key; set model = \"water\")"
+);
+case!(
+    permeability_without_grain_density,
+    DP,
+    [("permeability", Some("permeability = 1e-4"))],
+    "{}: key `grain_density`: is required with permeability: the porosity is 1 − density / grain_density (quartz sand: 2650 kg/m³)"
+);
+case!(
+    grain_density_below_bulk,
+    DP,
+    [("permeability", Some("permeability = 1e-4")), ("grain_density", Some("grain_density = 1500.0"))],
+    "{}:8: key `grain_density`: must exceed the bulk density 1600 kg/m³ (porosity 1 − density / grain_density > 0; got 1500)"
+);
+case!(
+    permeability_zero,
+    DP,
+    [("permeability", Some("permeability = 0.0")), ("grain_density", Some("grain_density = 2650.0"))],
+    "{}:7: key `permeability`: must be > 0 m/s (got 0)"
+);
+case!(
+    grain_density_alone,
+    DP,
+    [("grain_density", Some("grain_density = 2650.0"))],
+    "{}:7: key `grain_density`: applies with permeability (a soil water flows through) or with the μ(I) keys; give one or drop it"
 );

@@ -118,7 +118,7 @@ case!(
     unknown_section,
     "[sph]",
     "[fluid]\nx = 1\n[sph]",
-    "{}:5: key `fluid`: unknown field `fluid`, expected one of `simulation`, `sph`, `materials`, `container`, `terrain`, `soil_blocks`, `bodies`, `rig`, `output`, `vehicles`, `expect`, `study`, `accuracy` (unknown keys are errors so that nothing is silently ignored)"
+    "{}:5: key `fluid`: unknown field `fluid`, expected one of `simulation`, `sph`, `materials`, `container`, `terrain`, `soil_blocks`, `water_blocks`, `bodies`, `rig`, `output`, `vehicles`, `expect`, `study`, `accuracy` (unknown keys are errors so that nothing is silently ignored)"
 );
 case!(
     output_every_below_exchange,
@@ -224,7 +224,7 @@ case!(
     material_unknown_key,
     "poisson_ratio = 0.3",
     "poisson = 0.3",
-    "{}:13: key `materials[0].poisson`: unknown field `poisson`, expected one of `name`, `file`, `model`, `density`, `youngs_modulus`, `poisson_ratio`, `friction_angle`, `cohesion`, `mu_i_friction_angle`, `mu_i_i0`, `grain_diameter`, `grain_density`, `mcc_m`, `mcc_kappa`, `mcc_lambda`, `mcc_cr`, `mcc_cc`, `mcc_v_lambda`, `ocr`, `mcc_clamp_moduli`, `mcc_pc_floor` (unknown keys are errors so that nothing is silently ignored)"
+    "{}:13: key `materials[0].poisson`: unknown field `poisson`, expected one of `name`, `file`, `model`, `density`, `youngs_modulus`, `poisson_ratio`, `friction_angle`, `cohesion`, `mu_i_friction_angle`, `mu_i_i0`, `grain_diameter`, `grain_density`, `permeability`, `sound_speed`, `viscosity`, `mcc_m`, `mcc_kappa`, `mcc_lambda`, `mcc_cr`, `mcc_cc`, `mcc_v_lambda`, `ocr`, `mcc_clamp_moduli`, `mcc_pc_floor` (unknown keys are errors so that nothing is silently ignored)"
 );
 case!(
     terrain_unknown_material,
@@ -551,3 +551,74 @@ case!(
     "spacing = 0.02\n\n[sph.active]\nenabled = true\nradius = 0.1\n",
     "{}:10: key `sph.active.radius`: unknown field `radius`, expected one of `enabled`, `margin`, `depth_factor`, `travel`, `sleep_speed`, `free_flow_time` (unknown keys are errors so that nothing is silently ignored)"
 );
+
+const WET: &str = "permeability = 1e-3\ngrain_density = 2650.0\n\n[[materials]]\nname = \"water\"\nmodel = \"water\"\ndensity = 1000\nsound_speed = 50\nviscosity = 1e-3\n\n[container]";
+
+#[test]
+fn a_wet_scene_is_valid() {
+    let text = BASE.replacen("friction_angle = 30.0\n\n[container]", &format!("friction_angle = 30.0\n{WET}"), 1)
+        + "\n[[water_blocks]]\nmaterial = \"water\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.4, 0.4, 0.2]\n";
+    let s = load_scene(&write("wet", &text), &[]).expect("valid");
+    assert_eq!(s.soil.len(), 2);
+}
+
+/// A wet scene with `from` replaced by `to`: its error.
+fn wet_err(name: &str, from: &str, to: &str) -> (PathBuf, String) {
+    let text = BASE.replacen("friction_angle = 30.0\n\n[container]", &format!("friction_angle = 30.0\n{WET}"), 1)
+        + "\n[[water_blocks]]\nmaterial = \"water\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.4, 0.4, 0.2]\n";
+    assert!(text.contains(from), "bad test: {from:?}");
+    err(name, &text.replacen(from, to, 1))
+}
+
+#[test]
+fn wet_scene_mistakes_are_one_line_errors() {
+    let cases = [
+        (
+            "wet_terrain_water",
+            "material = \"sand\"\ndepth",
+            "material = \"water\"\ndepth",
+            ":30: key `terrain.material`: is water: the bed is soil; put water in [[water_blocks]]",
+        ),
+        (
+            "wet_block_soil",
+            "material = \"water\"\nshape",
+            "material = \"sand\"\nshape",
+            ":34: key `water_blocks[0].material`: \"sand\" is a soil: water blocks take a material with model = \"water\"",
+        ),
+        (
+            "wet_no_permeability",
+            "permeability = 1e-3\ngrain_density = 2650.0\n",
+            "",
+            ":8: key `materials[0].permeability`: is required for \"sand\": the scene has water, which flows through every soil (give permeability in m/s and grain_density)",
+        ),
+        (
+            "wet_initial_pressure",
+            "shape = \"box\"\nmin = [0.0, 0.0, 0.0]",
+            "shape = \"box\"\ninitial_pressure = 1e3\nmin = [0.0, 0.0, 0.0]",
+            ":36: key `water_blocks[0].initial_pressure`: applies to soil blocks; water starts hydrostatic from the water above it",
+        ),
+        (
+            "wet_wgpu",
+            "dt = \"auto\"",
+            "dt = \"auto\"\nbackend = \"wgpu\"",
+            ":4: key `simulation.backend`: \"wgpu\" has no water phase yet: a scene with [[water_blocks]] runs on \"cpu\"",
+        ),
+        (
+            "wet_active",
+            "spacing = 0.02",
+            "spacing = 0.02\n\n[sph.active]\nenabled = true",
+            ":8: key `sph.active`: is not available with water yet: remove [sph.active] from a wet scene",
+        ),
+    ];
+    for (name, from, to, expected) in cases {
+        let (p, e) = wet_err(name, from, to);
+        assert_eq!(e, format!("{}{expected}", p.display()), "{name}");
+    }
+    let dry = BASE.to_string()
+        + "\n[[bodies]]\nname = \"filter\"\nshape = { type = \"box\", size = [0.1, 0.1, 0.02] }\nmass = 1.0\nposition = [0.2, 0.2, 0.3]\nmotion = { type = \"fixed\" }\nfsi = true\npermeable = true\n";
+    let (p, e) = err("dry_permeable", &dry);
+    assert_eq!(
+        e,
+        format!("{}:31: key `bodies[0].permeable`: needs water in the scene ([[water_blocks]])", p.display())
+    );
+}

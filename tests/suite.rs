@@ -52,5 +52,7 @@ mod triaxial;
 mod vehicles;
 #[path = "verlet.rs"]
 mod verlet;
+#[path = "wet_soil.rs"]
+mod wet_soil;
 #[path = "wgpu_parity.rs"]
 mod wgpu_parity;

@@ -99,6 +99,14 @@ pub trait SphSolver<T: Real>: Send {
             ))),
         }
     }
+    /// Makes the markers of the flagged owners (`[0]` the fixed walls, `[k + 1]` body k)
+    /// permeable to water. Backends without water refuse any flag.
+    fn set_permeable(&mut self, permeable: &[bool]) -> Result<(), SolverError> {
+        if permeable.iter().any(|p| *p) {
+            return Err(SolverError::Setup(format!("the {} backend has no water phase", self.backend())));
+        }
+        Ok(())
+    }
     /// Classifications of the active region so far (0 without one).
     fn classifications(&self) -> u64 {
         0
@@ -215,6 +223,9 @@ impl<T: Real> SphSolver<T> for CpuSph<T> {
     }
     fn classifications(&self) -> u64 {
         CpuSph::classifications(self)
+    }
+    fn set_permeable(&mut self, permeable: &[bool]) -> Result<(), SolverError> {
+        CpuSph::set_permeable(self, permeable)
     }
     fn set_wall_contact(
         &mut self,

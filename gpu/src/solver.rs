@@ -191,6 +191,8 @@ fn gpu_material(m: &Material<f32>) -> layout::Material {
             }
             g.pc_floor = mcc.safeguards.pc_floor;
         }
+        // Refused in `GpuSph::new`.
+        Rheology::Water(_) => g.model = u32::MAX,
     }
     g
 }
@@ -226,6 +228,11 @@ impl GpuSph {
     ) -> Result<Self, GpuError> {
         if materials.is_empty() {
             return Err(GpuError::Setup("no materials".into()));
+        }
+        if materials.iter().any(Material::is_water) {
+            return Err(GpuError::Setup(
+                "water (a wet scene) runs on the CPU backend only for now: set [simulation] backend = \"cpu\"".into(),
+            ));
         }
         if let Some(p) = particles.iter().find(|p| p.material as usize >= materials.len()) {
             return Err(GpuError::Setup(format!("particle material index {} out of range", p.material)));

@@ -345,6 +345,11 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
     let contacts: Vec<_> =
         std::iter::once(scene.wall_contact).chain(scene.bodies.iter().filter(|b| b.fsi).map(|b| b.contact)).collect();
     set_contacts(system.fluid.as_mut(), &scene, &contacts, &terrain)?;
+    let permeable: Vec<bool> =
+        std::iter::once(false).chain(scene.bodies.iter().filter(|b| b.fsi).map(|b| b.permeable)).collect();
+    if permeable.iter().any(|p| *p) {
+        system.fluid.set_permeable(&permeable)?;
+    }
     if let Some(a) = active {
         if system.fluid.backend() != "cpu" {
             return Err(BuildError::ActiveBackend { file: scene.path.clone(), backend: system.fluid.backend().into() });

@@ -78,7 +78,7 @@ pub fn element_figure<T: Real>(path: &ElementPath, material: &Material<T>) -> Fi
             ));
             pq.x_range = Some((0.0, top / 1e3));
         }
-        Rheology::Elastic => {}
+        Rheology::Elastic | Rheology::Water(_) => {}
     }
     Figure { panels: vec![pq, vp] }
 }

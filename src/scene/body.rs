@@ -165,6 +165,10 @@ pub(super) fn resolve_body(
             }
         },
     };
+    let permeable = b.permeable.unwrap_or(false);
+    if permeable && !fsi {
+        return Err(e("permeable", "is set but fsi = false (the body has no markers to let water through)".into()));
+    }
     let friction = b.friction.unwrap_or(0.5);
     if !(friction.is_finite() && friction >= 0.0) {
         return Err(e("friction", format!("must be ≥ 0 (got {friction})")));
@@ -186,5 +190,6 @@ pub(super) fn resolve_body(
         initial_velocity,
         active_margin: b.active_margin,
         contact,
+        permeable,
     })
 }

@@ -16,6 +16,8 @@ pub(crate) struct SceneFile {
     #[serde(default)]
     pub soil_blocks: Vec<SoilBlockFile>,
     #[serde(default)]
+    pub water_blocks: Vec<SoilBlockFile>,
+    #[serde(default)]
     pub bodies: Vec<BodyFile>,
     pub rig: Option<RigFile>,
     pub output: Option<OutputFile>,
@@ -193,6 +195,7 @@ pub(crate) struct BodyFile {
     pub friction: Option<f64>,
     pub active_margin: Option<f64>,
     pub soil_contact: Option<toml::Value>,
+    pub permeable: Option<bool>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]

@@ -154,6 +154,21 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         vehicles.push(vehicle::resolve_vehicle(path, i, v, bce_layers, &mut bodies, &e)?);
     }
     check_lattice_size(&container, &bodies, spacing, &e)?;
+    let wet = materials.iter().any(|m| m.params.model == Some(regolith_fsi::rheology::ModelKind::Water));
+    if let Some(i) = bodies.iter().position(|b| b.permeable)
+        && !wet
+    {
+        return Err(e(&format!("bodies[{i}].permeable"), "needs water in the scene ([[water_blocks]])".into()));
+    }
+    if wet && backend == Backend::Wgpu {
+        return Err(e(
+            "simulation.backend",
+            "\"wgpu\" has no water phase yet: a scene with [[water_blocks]] runs on \"cpu\"".into(),
+        ));
+    }
+    if wet && active.is_some() {
+        return Err(e("sph.active", "is not available with water yet: remove [sph.active] from a wet scene".into()));
+    }
     let rig = match &file.rig {
         None => None,
         Some(r) => Some(resolve_rig(path, source, r, &bodies, &file.bodies, solver.gravity)?),

@@ -95,6 +95,7 @@ pub fn describe(scene: &Scene) -> String {
         let Ok(mat) = m.params.build::<f64>() else { continue };
         let detail = match &mat.rheology {
             Rheology::Elastic => String::new(),
+            Rheology::Water(w) => format!(", sound speed {} m/s, viscosity {} Pa s", w.sound_speed, w.viscosity),
             Rheology::DruckerPrager(dp) => format!(
                 ", φ = {}°, c = {} Pa{}",
                 mat.friction_angle_deg,

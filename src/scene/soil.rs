@@ -1,5 +1,5 @@
-//! `[[materials]]`, `[container]`, `[terrain]` and `[[soil_blocks]]`: the soil and what it is
-//! made of.
+//! `[[materials]]`, `[container]`, `[terrain]`, `[[soil_blocks]]` and `[[water_blocks]]`: the
+//! soil, the water in and above it, and what they are made of.
 
 use super::*;
 
@@ -137,9 +137,37 @@ pub(super) fn resolve_soil(
             initial_pressure: None,
         });
     }
-    for (i, b) in file.soil_blocks.iter().enumerate() {
-        let k = |s: &str| format!("soil_blocks[{i}].{s}");
+    let is_water = |m: usize| materials[m].params.model == Some(regolith_fsi::rheology::ModelKind::Water);
+    if let Some(t) = soil.first()
+        && is_water(t.material)
+    {
+        return Err(e("terrain.material", "is water: the bed is soil; put water in [[water_blocks]]".into()));
+    }
+    let blocks = file.soil_blocks.iter().enumerate().map(|(i, b)| ("soil_blocks", i, b));
+    let blocks = blocks.chain(file.water_blocks.iter().enumerate().map(|(i, b)| ("water_blocks", i, b)));
+    for (section, i, b) in blocks {
+        let k = |s: &str| format!("{section}[{i}].{s}");
         let material = find_material(&k("material"), &b.material)?;
+        let water = section == "water_blocks";
+        if water != is_water(material) {
+            return Err(e(
+                &k("material"),
+                if water {
+                    format!(
+                        "\"{}\" is a soil: water blocks take a material with model = \"water\"",
+                        materials[material].name
+                    )
+                } else {
+                    format!("\"{}\" is water: put it in [[water_blocks]]", materials[material].name)
+                },
+            ));
+        }
+        if water && b.initial_pressure.is_some() {
+            return Err(e(
+                &k("initial_pressure"),
+                "applies to soil blocks; water starts hydrostatic from the water above it".into(),
+            ));
+        }
         let shape = b.shape.ok_or_else(|| e(&k("shape"), "is required: \"box\" or \"cylinder\"".into()))?;
         let region = match shape {
             BlockShapeName::Box => {
@@ -218,10 +246,24 @@ pub(super) fn resolve_soil(
                 ));
             }
         };
-        soil.push(SoilSpec { material, region, key: format!("soil_blocks[{i}]"), velocity, initial_pressure });
+        soil.push(SoilSpec { material, region, key: format!("{section}[{i}]"), velocity, initial_pressure });
     }
     if soil.is_empty() {
         return Err(InputError::file(path, "the scene has no soil: add [terrain] or [[soil_blocks]]"));
+    }
+    if soil.iter().any(|s| is_water(s.material)) {
+        if materials.iter().filter(|m| m.params.model == Some(regolith_fsi::rheology::ModelKind::Water)).count() > 1 {
+            return Err(e("water_blocks", "take one water material: a scene holds at most one".into()));
+        }
+        if let Some(i) = (0..materials.len()).find(|&i| !is_water(i) && materials[i].params.permeability.is_none()) {
+            return Err(e(
+                &format!("materials[{i}].permeability"),
+                format!(
+                    "is required for \"{}\": the scene has water, which flows through every soil (give permeability in m/s and grain_density)",
+                    materials[i].name
+                ),
+            ));
+        }
     }
     for (i, m) in materials.iter().enumerate() {
         if !soil.iter().any(|s| s.material == i) {

@@ -89,6 +89,9 @@ pub struct BodySpec {
     pub active_margin: Option<f64>,
     /// How soil slides along the body (`soil_contact`; rough by default).
     pub contact: WallContact,
+    /// Water passes through the body's markers, the soil does not (`permeable`: a filter
+    /// stone).
+    pub permeable: bool,
 }
 
 /// How a plate is driven.

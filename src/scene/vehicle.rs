@@ -286,6 +286,7 @@ pub(crate) fn resolve_vehicle(
             initial_velocity: None,
             active_margin: None,
             contact: WallContact::Rough,
+            permeable: false,
         });
     }
     for b in &bodies[first_body..] {

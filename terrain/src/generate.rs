@@ -86,6 +86,9 @@ fn index_range(origin: f64, d0: f64, lo: f64, hi: f64) -> (i64, i64) {
     (first, last)
 }
 
+/// The soil region and the water region holding a lattice point, if any.
+type Occupants = (Option<usize>, Option<usize>);
+
 /// Builds soil particles and wall markers.
 pub fn build_terrain(
     container: &Aabb,
@@ -107,21 +110,25 @@ pub fn build_terrain(
     }
     let [nx, ny, nz] = lat.n;
     let d0 = spacing;
-    // Occupied interior lattice points and the region holding each; regions may not overlap.
+    if let Some(spec) = regions.iter().find(|r| r.material as usize >= materials.len()) {
+        return Err(TerrainError::Setup(format!("material index {} out of range", spec.material)));
+    }
+    let is_water = |r: usize| materials[regions[r].material as usize].is_water();
+    // Occupied interior lattice points and the region holding each, one map per phase (water
+    // shares space with soil); regions of a phase may not overlap.
     let mut cells: HashMap<[i64; 3], usize> = HashMap::new();
+    let mut water_cells: HashMap<[i64; 3], usize> = HashMap::new();
     let mut overlap = None;
     let mut insert = |c: [i64; 3], r: usize| {
         if c[0] >= 1 && c[0] < nx && c[1] >= 1 && c[1] < ny && c[2] >= 1 && c[2] < nz {
-            let held = *cells.entry(c).or_insert(r);
+            let map = if is_water(r) { &mut water_cells } else { &mut cells };
+            let held = *map.entry(c).or_insert(r);
             if held != r && overlap.is_none() {
                 overlap = Some((held, r, c));
             }
         }
     };
     for (r, spec) in regions.iter().enumerate() {
-        if spec.material as usize >= materials.len() {
-            return Err(TerrainError::Setup(format!("material index {} out of range", spec.material)));
-        }
         match &spec.region {
             SoilRegion::Bed { surface, .. } => {
                 let size = snapped.size();
@@ -169,48 +176,75 @@ pub fn build_terrain(
     if let Some((first, second, c)) = overlap {
         return Err(TerrainError::Overlap { first, second, at: lat.point(c) });
     }
-    if cells.is_empty() {
+    if cells.is_empty() && water_cells.is_empty() {
         return Err(TerrainError::Setup(
             "the soil regions contain no lattice point: make them larger than the spacing".into(),
         ));
     }
-    // Geostatic stress, column by column from the top.
-    let mut columns: BTreeMap<(i64, i64), Vec<(i64, usize)>> = BTreeMap::new();
+    // Geostatic stress, column by column from the top: each lattice point holds soil, water
+    // or both (a saturated cell).
+    let mut columns: BTreeMap<(i64, i64), BTreeMap<i64, Occupants>> = BTreeMap::new();
     for (c, r) in &cells {
-        columns.entry((c[0], c[1])).or_default().push((c[2], *r));
+        columns.entry((c[0], c[1])).or_default().entry(c[2]).or_default().0 = Some(*r);
     }
-    let mut particles = Vec::with_capacity(cells.len());
-    for ((i, j), mut col) in columns {
-        col.sort_unstable_by_key(|c| std::cmp::Reverse(c.0));
-        // Mass per area of the soil above the current particle (kg/m²): the stress it carries
-        // is that times −g (component by component).
-        let mut above = 0.0;
-        for (k, r) in col {
-            let m = regions[r].material;
-            let mat = &materials[m as usize];
-            let half = mat.density * 0.5 * d0;
+    for (c, r) in &water_cells {
+        columns.entry((c[0], c[1])).or_default().entry(c[2]).or_default().1 = Some(*r);
+    }
+    let mut particles = Vec::with_capacity(cells.len() + water_cells.len());
+    for ((i, j), col) in columns {
+        // Mass per area of the mixture above the current point (kg/m²), whose weight the
+        // total stress carries, and the depth of water above it (m), whose weight its pore
+        // pressure carries (hydrostatic below a water table).
+        let (mut above, mut water_above) = (0.0, 0.0);
+        for (k, (soil, water)) in col.into_iter().rev() {
+            let soil_mat = soil.map(|r| &materials[regions[r].material as usize]);
+            let water_mat = water.map(|r| &materials[regions[r].material as usize]);
+            // The water's partial density: its rest density times the soil's porosity.
+            let porosity =
+                soil_mat.map_or(1.0, |m| if m.grain_density > 0.0 { 1.0 - m.density / m.grain_density } else { 1.0 });
+            let water_rho = water_mat.map_or(0.0, |w| w.density * porosity);
+            let half = (soil_mat.map_or(0.0, |m| m.density) + water_rho) * 0.5 * d0;
             let column = above + half;
             above += 2.0 * half;
-            let (sigma, p0) = match regions[r].initial_pressure {
-                Some(p) => ([-p, -p, -p, 0.0, 0.0, 0.0], p),
-                None => {
-                    let sv = column * gravity[2];
-                    let (sxz, syz) = (-column * gravity[0], -column * gravity[1]);
-                    let sh = mat.k0() * sv;
-                    ([sh, sh, sv, 0.0, sxz, syz], -(sv + 2.0 * sh) / 3.0)
-                }
-            };
-            let st = mat.initial_state(p0);
-            particles.push(ParticleInit {
-                pos: lat.point([i, j, k]),
-                vel: regions[r].velocity,
-                rho: mat.density,
-                mass: mat.density * d0 * d0 * d0,
-                sigma,
-                pc: if matches!(mat.rheology, Rheology::Mcc(_)) { st.pc } else { 0.0 },
-                specific_volume: st.v,
-                material: m,
-            });
+            let u = water_mat.map_or(0.0, |w| w.density * (water_above + 0.5 * d0) * -gravity[2]).max(0.0);
+            if water.is_some() {
+                water_above += d0;
+            }
+            if let (Some(r), Some(mat)) = (soil, soil_mat) {
+                let (sigma, p0) = match regions[r].initial_pressure {
+                    Some(p) => ([-p, -p, -p, 0.0, 0.0, 0.0], p),
+                    None => {
+                        // Effective stress: the total minus the pore pressure.
+                        let sv = column * gravity[2] + u;
+                        let (sxz, syz) = (-column * gravity[0], -column * gravity[1]);
+                        let sh = mat.k0() * sv;
+                        ([sh, sh, sv, 0.0, sxz, syz], -(sv + 2.0 * sh) / 3.0)
+                    }
+                };
+                let st = mat.initial_state(p0);
+                particles.push(ParticleInit {
+                    pos: lat.point([i, j, k]),
+                    vel: regions[r].velocity,
+                    rho: mat.density,
+                    mass: mat.density * d0 * d0 * d0,
+                    sigma,
+                    pc: if matches!(mat.rheology, Rheology::Mcc(_)) { st.pc } else { 0.0 },
+                    specific_volume: st.v,
+                    material: regions[r].material,
+                });
+            }
+            if let Some(r) = water {
+                particles.push(ParticleInit {
+                    pos: lat.point([i, j, k]),
+                    vel: regions[r].velocity,
+                    rho: water_rho,
+                    mass: water_rho * d0 * d0 * d0,
+                    sigma: [-u, -u, -u, 0.0, 0.0, 0.0],
+                    pc: 0.0,
+                    specific_volume: 1.0,
+                    material: regions[r].material,
+                });
+            }
         }
     }
     let l = bce_layers as i64;

@@ -17,6 +17,7 @@
 mod grid;
 mod neighbors;
 mod rates;
+mod wet;
 
 pub use grid::GridSpec;
 
@@ -167,6 +168,21 @@ pub struct CpuSph<T: Real> {
     list_builds: u64,
     /// Steps made again from fresh lists because the midpoint stage left the skin.
     stage_retries: u64,
+    // Wet scenes (see `wet`); empty for dry ones.
+    wet: Option<wet::WetSetup<T>>,
+    /// The water's densities were set from the porosity the soil gives them at the start.
+    water_ready: bool,
+    phase: Vec<wet::Phase<T>>,
+    pore: Vec<wet::Pore<T>>,
+    /// Drag rate λ of each particle at the last evaluation (1/s).
+    drag_rate: Vec<T>,
+    /// The markers' water records (the soil's are `m_packed`) and coupling shares.
+    m_packed_w: Vec<Packed<T>>,
+    m_pore: Vec<wet::MarkerPore<T>>,
+    /// Owners whose markers water passes through (empty: none).
+    owner_permeable: Vec<bool>,
+    /// Whether each touched marker is permeable (wet scenes).
+    m_permeable: Vec<bool>,
 }
 
 /// Calls a rate function instantiated for the effects that are on: each combination is its
@@ -224,8 +240,10 @@ impl<T: Real> CpuSph<T> {
             )));
         }
         let h = cfg.h();
+        let wet = wet::WetSetup::of(&materials, lattice_sum(&cfg)).map_err(SolverError::Setup)?;
         let grid = GridSpec::covering(domain.0, domain.1, h);
         let n = particles.len();
+        let n_wet = if wet.is_some() { n } else { 0 };
         let ref_rho = materials.iter().map(|m| m.density.as_f64()).fold(0.0, f64::max);
         let ref_cs = materials.iter().map(|m| m.wave_speed().as_f64()).fold(0.0, f64::max);
         let consts = PairConsts {
@@ -321,7 +339,21 @@ impl<T: Real> CpuSph<T> {
             stage_motion: 0.0,
             list_builds: 0,
             stage_retries: 0,
+            wet,
+            water_ready: false,
+            phase: vec![wet::Phase::default(); n_wet],
+            pore: vec![wet::Pore::default(); n_wet],
+            drag_rate: vec![T::zero(); n_wet],
+            m_packed_w: Vec::new(),
+            m_pore: Vec::new(),
+            owner_permeable: Vec::new(),
+            m_permeable: Vec::new(),
         })
+    }
+
+    /// Whether the scene has a water phase.
+    pub fn is_wet(&self) -> bool {
+        self.wet.is_some()
     }
 
     /// Solver settings.
@@ -381,6 +413,11 @@ impl<T: Real> CpuSph<T> {
     /// Keeps an active region from now on (`None`: the whole domain is awake). `domain.boxes`
     /// has one box per FSI body, in marker-owner order (owner `k + 1` is box `k`).
     pub fn set_active_domain(&mut self, domain: Option<ActiveDomain>) -> Result<(), SolverError> {
+        if domain.is_some() && self.wet.is_some() {
+            return Err(SolverError::Setup(
+                "active domains are not available with water yet: keep the whole domain active".into(),
+            ));
+        }
         if let Some(d) = &domain {
             if let Err((key, msg)) = d.settings.validate() {
                 return Err(SolverError::Setup(format!("active domain {key} {msg}")));
@@ -521,6 +558,16 @@ impl<T: Real> CpuSph<T> {
             self.m_normal =
                 (0..self.m_owner.len()).map(|i| normals.get(i).map_or(Vec3::zero(), |n| Vec3::of(*n))).collect();
         }
+        Ok(())
+    }
+    /// Makes the markers of the owners flagged in `permeable` (`[0]` the fixed walls, `[k + 1]`
+    /// body k) permeable to water: a filter that holds the soil and lets the water through.
+    /// Refused in a dry scene, where it would mean nothing.
+    pub fn set_permeable(&mut self, permeable: &[bool]) -> Result<(), SolverError> {
+        if self.wet.is_none() && permeable.iter().any(|p| *p) {
+            return Err(SolverError::Setup("permeable markers need water in the scene".into()));
+        }
+        self.owner_permeable = permeable.to_vec();
         Ok(())
     }
     /// Marker owners (0 = fixed walls, k + 1 = body k), original order.
@@ -831,6 +878,10 @@ impl<T: Real> CpuSph<T> {
         self.nl_ms.transpose_compact(&mut self.nl_sm, self.ms_pos.len(), &mut self.touched);
         self.m_packed.resize(self.touched.len(), Packed::default());
         self.ms_force.resize(self.touched.len(), Vec3::zero());
+        if self.wet.is_some() {
+            self.m_packed_w.resize(self.touched.len(), Packed::default());
+            self.m_pore.resize(self.touched.len(), wet::MarkerPore::default());
+        }
         // References for the reuse test.
         self.list_builds += 1;
         self.lists_partitioned = self.partitioned();
@@ -854,6 +905,9 @@ impl<T: Real> CpuSph<T> {
     }
 
     fn evaluate_k<K: Kernel<T>>(&mut self, from_stage: bool, with_forces: bool) {
+        if self.wet.is_some() {
+            return self.evaluate_wet::<K>(from_stage, with_forces);
+        }
         // Rates for the awake particles; records for the awake and extended ones.
         let (n, m) = (self.awake, self.near);
         let (pos, vel, rho, sigma, state) = if from_stage {
@@ -866,7 +920,7 @@ impl<T: Real> CpuSph<T> {
             rates::SoilView { pos, vel, rho, sigma, state, material: &self.material[..m], mass: &self.mass[..m] };
         rates::pack_soil(&self.materials, &view, &mut self.packed[..m], &mut self.moduli[..m]);
         self.c_max = self.packed[..n].par_iter().map(|p| p.cs.as_f64()).reduce(|| self.ref_cs.as_f64(), f64::max);
-        rates::extrapolate_markers::<T, K>(
+        rates::extrapolate_markers::<T, K, _>(
             &c,
             &self.ms_pos,
             &self.ms_vel,
@@ -877,7 +931,7 @@ impl<T: Real> CpuSph<T> {
             &self.touched,
             &self.nl_ms,
             &self.packed[..m],
-            sigma,
+            |a| Some((sigma[a], self.packed[a].rho)),
             (!self.owner_mu.is_empty()).then_some(rates::ContactView {
                 orig: &self.ms_orig,
                 owner: &self.m_owner,
@@ -926,6 +980,175 @@ impl<T: Real> CpuSph<T> {
         }
     }
 
+    /// The packing and marker passes of a wet evaluation, up to the porosity: records packed,
+    /// phases known, the markers' solid shares, the water's porosity, pressure and partial
+    /// stress, the soil's saturation.
+    fn wet_pores<K: Kernel<T>>(&mut self, from_stage: bool) {
+        let m = self.near;
+        let (pos, vel, rho, sigma, state) = if from_stage {
+            (&self.s_pos[..m], &self.s_vel[..m], &self.s_rho[..m], &self.s_sigma[..m], &self.s_state[..m])
+        } else {
+            (&self.pos[..m], &self.vel[..m], &self.rho[..m], &self.sigma[..m], &self.state[..m])
+        };
+        let c = self.consts;
+        let setup = self.wet.expect("wet scene");
+        let view =
+            rates::SoilView { pos, vel, rho, sigma, state, material: &self.material[..m], mass: &self.mass[..m] };
+        rates::pack_soil(&self.materials, &view, &mut self.packed[..m], &mut self.moduli[..m]);
+        wet::phases(&setup, &self.materials, &self.material[..m], &self.mass[..m], &mut self.phase[..m]);
+        wet::marker_solids::<T, K>(
+            &c,
+            &self.ms_pos,
+            &self.ms_vel,
+            self.m_volume,
+            &self.touched,
+            &self.nl_ms,
+            &self.packed[..m],
+            &self.phase[..m],
+            &mut self.m_pore,
+        );
+        let (orig, owner, perm) = (&self.ms_orig, &self.m_owner, &self.owner_permeable);
+        self.m_permeable.clear();
+        self.m_permeable.extend(
+            self.touched.iter().map(|&k| perm.get(owner[orig[k as usize] as usize] as usize).copied().unwrap_or(false)),
+        );
+        let (touched, ms_pos) = (&self.touched, &self.ms_pos);
+        wet::porosity::<T, K>(
+            &c,
+            &setup,
+            &self.nl_ss,
+            &self.nl_sm,
+            &self.phase[..m],
+            &self.m_pore,
+            &self.m_permeable,
+            |k| ms_pos[touched[k] as usize],
+            &mut self.packed[..m],
+            &mut self.pore[..m],
+        );
+    }
+
+    /// A rate evaluation of a wet scene (see [`wet`]); the dry one is [`Self::evaluate_k`].
+    fn evaluate_wet<K: Kernel<T>>(&mut self, from_stage: bool, with_forces: bool) {
+        self.wet_pores::<K>(from_stage);
+        let (n, m) = (self.awake, self.near);
+        let sigma = if from_stage { &self.s_sigma[..m] } else { &self.sigma[..m] };
+        let c = self.consts;
+        let setup = self.wet.expect("wet scene");
+        self.c_max = self.packed[..n].par_iter().map(|p| p.cs.as_f64()).reduce(|| self.ref_cs.as_f64(), f64::max);
+        let contact = (!self.owner_mu.is_empty()).then_some(rates::ContactView {
+            orig: &self.ms_orig,
+            owner: &self.m_owner,
+            normal: &self.m_normal,
+            mu: &self.owner_mu,
+        });
+        let (packed, phase, pore) = (&self.packed[..m], &self.phase[..m], &self.pore[..m]);
+        // The soil's record of each marker, with the hydrostatic step of the effective stress:
+        // a saturated soil weighs ρ − ρ_w (1 − n) in its own stress.
+        rates::extrapolate_markers::<T, K, _>(
+            &c,
+            &self.ms_pos,
+            &self.ms_vel,
+            &self.ms_acc,
+            self.m_volume,
+            self.ref_rho,
+            self.ref_cs,
+            &self.touched,
+            &self.nl_ms,
+            packed,
+            |a| {
+                let ph = &phase[a];
+                (!ph.water).then(|| (sigma[a], packed[a].rho - setup.rest * ph.vg / packed[a].vol * pore[a].sat))
+            },
+            contact,
+            &mut self.m_packed,
+        );
+        wet::marker_pressures::<T, K>(
+            &c,
+            &setup,
+            &self.ms_pos,
+            &self.ms_acc,
+            &self.touched,
+            &self.nl_ms,
+            packed,
+            phase,
+            pore,
+            &mut self.m_pore,
+        );
+        // The water's record: its partial stress −n p I; walls are smooth or rough for it as
+        // for the soil.
+        rates::extrapolate_markers::<T, K, _>(
+            &c,
+            &self.ms_pos,
+            &self.ms_vel,
+            &self.ms_acc,
+            self.m_volume,
+            setup.rest,
+            setup.water.sound_speed,
+            &self.touched,
+            &self.nl_ms,
+            packed,
+            |a| phase[a].water.then(|| (Sym3::iso(-(pore[a].n * pore[a].p)), packed[a].rho)),
+            contact,
+            &mut self.m_packed_w,
+        );
+        let visc = self.cfg.artificial_viscosity > 0.0;
+        let (xsph, ppst) = (self.cfg.shifting.xsph(), self.cfg.shifting.ppst());
+        use wet::wet_rates;
+        dispatch_effects!(
+            visc,
+            xsph,
+            ppst,
+            !from_stage,
+            wet_rates::<T, K>(
+                &c,
+                &setup,
+                packed,
+                &self.m_packed,
+                &self.m_packed_w,
+                (&self.m_pore, &self.m_permeable),
+                phase,
+                pore,
+                (&self.nl_ss, &self.nl_sm),
+                sigma,
+                &self.moduli[..m],
+                &mut self.rates[..n],
+                &mut self.drag_rate[..n]
+            )
+        );
+        if with_forces {
+            wet::wet_marker_forces::<T, K>(
+                &c,
+                (visc, setup.inv_lattice_sum),
+                &self.packed[..n],
+                (&self.m_packed, &self.m_packed_w),
+                (&self.m_pore, &self.m_permeable),
+                phase,
+                pore,
+                &self.nl_ms,
+                &mut self.ms_force,
+            );
+        }
+    }
+
+    /// Sets each water particle's partial density from the porosity the soil gives it where it
+    /// starts and the pore pressure it was given (its initial stress −p I): `ρ̄ = n ρ_w(p)`, so
+    /// that the discrete porosity, not the nominal one, starts the water at that pressure.
+    fn init_water(&mut self) {
+        match self.cfg.kernel {
+            KernelKind::Wendland => self.wet_pores::<WendlandC2>(false),
+            KernelKind::Cubic => self.wet_pores::<CubicSpline>(false),
+        }
+        let setup = self.wet.expect("wet scene");
+        let m = self.near;
+        let (phase, pore, sigma) = (&self.phase[..m], &self.pore[..m], &self.sigma[..m]);
+        self.rho[..m].par_iter_mut().enumerate().for_each(|(i, r)| {
+            if phase[i].water {
+                *r = pore[i].n * setup.water.density_at(sigma[i].pressure().max(T::zero()), setup.rest);
+            }
+        });
+        self.water_ready = true;
+    }
+
     fn choose_dt(&self, limit: Option<f64>) -> f64 {
         let dt = match self.cfg.time_step {
             TimeStep::Fixed(dt) => dt,
@@ -937,6 +1160,13 @@ impl<T: Real> CpuSph<T> {
                 let mut dt = cfl * h / (self.c_max + vmax);
                 if amax > 0.0 {
                     dt = dt.min(cfl * (h / amax).sqrt());
+                }
+                if self.wet.is_some() {
+                    // Explicit drag: stable below 2 / λ.
+                    let lambda = self.drag_rate[..n].par_iter().map(|l| l.as_f64()).reduce(|| 0.0, f64::max);
+                    if lambda > 0.0 {
+                        dt = dt.min(1.0 / lambda);
+                    }
                 }
                 dt.min(max)
             }
@@ -951,6 +1181,9 @@ impl<T: Real> CpuSph<T> {
         let mut force = false;
         let dt = loop {
             let rebuilt = self.sort_and_search(force);
+            if self.wet.is_some() && !self.water_ready {
+                self.init_water();
+            }
             self.evaluate(false, !rk2);
             let n = self.awake;
             {
@@ -1001,6 +1234,15 @@ impl<T: Real> CpuSph<T> {
         };
         self.advance(dt, dt, false)?;
         let n = self.awake;
+        if self.wet.is_some() {
+            // A water particle's stress is its pore pressure (from the last evaluation).
+            let (phase, pore) = (&self.phase[..n], &self.pore[..n]);
+            self.sigma[..n].par_iter_mut().enumerate().for_each(|(i, s)| {
+                if phase[i].water {
+                    *s = Sym3::iso(-pore[i].p);
+                }
+            });
+        }
         // Marker forces back to original order; impulse on the soil from the markers.
         let mut total = [0.0; 3];
         for f in self.m_force.iter_mut() {
@@ -1029,7 +1271,7 @@ impl<T: Real> CpuSph<T> {
         let rarefied = self.rho[..n]
             .par_iter()
             .zip(self.material[..n].par_iter())
-            .filter(|(r, m)| **r <= materials[**m as usize].density * floor)
+            .filter(|(r, m)| **r <= density_floor(&materials[**m as usize], floor))
             .count();
         Ok(StepReport {
             dt,
@@ -1076,7 +1318,7 @@ impl<T: Real> CpuSph<T> {
                     let r = &rates[i];
                     *sv = vel[i] + r.acc * h;
                     *sp = pos[i] + (vel[i] + r.xsph * eps) * h;
-                    *sr = at_least(rho[i] + r.drho * h, materials[mats[i] as usize].density * floor);
+                    *sr = at_least(rho[i] + r.drho * h, density_floor(&materials[mats[i] as usize], floor));
                     let (s, st) = correct(
                         &materials[mats[i] as usize],
                         &sigma[i],
@@ -1113,7 +1355,7 @@ impl<T: Real> CpuSph<T> {
                         dx += d;
                     }
                     *p += dx;
-                    *rh = at_least(*rh + r.drho * h, materials[mats[i] as usize].density * floor);
+                    *rh = at_least(*rh + r.drho * h, density_floor(&materials[mats[i] as usize], floor));
                     let (s_new, st_new) =
                         correct(&materials[mats[i] as usize], s, st, r, h, det[i] || (zero_surface && fsf[i]))
                             .map_err(|e| err_rheo(i, e))?;
@@ -1132,6 +1374,36 @@ impl<T: Real> CpuSph<T> {
                 })
         }
     }
+}
+
+/// The density below which a particle of `mat` is held (`floor` × the rest density; for
+/// water, whose density is partial, `floor` × the smallest porosity × the rest density).
+#[inline(always)]
+fn density_floor<T: Real>(mat: &Material<T>, floor: T) -> T {
+    if mat.is_water() { mat.density * floor * T::of(crate::rheology::MIN_POROSITY) } else { mat.density * floor }
+}
+
+/// `Σ d0³ W(|x|)` over the points of a cubic lattice of spacing d0 (the particles' starting
+/// lattice), for the configured kernel and h.
+fn lattice_sum(cfg: &SolverConfig) -> f64 {
+    let (h, d0) = (cfg.h(), cfg.spacing);
+    let reach = (2.0 * h / d0).ceil() as i64;
+    let w = |r: f64| match cfg.kernel {
+        KernelKind::Wendland => <WendlandC2 as Kernel<f64>>::w(r, 1.0 / h, <WendlandC2 as Kernel<f64>>::alpha(h)),
+        KernelKind::Cubic => <CubicSpline as Kernel<f64>>::w(r, 1.0 / h, <CubicSpline as Kernel<f64>>::alpha(h)),
+    };
+    let mut sum = 0.0;
+    for i in -reach..=reach {
+        for j in -reach..=reach {
+            for k in -reach..=reach {
+                let r = d0 * ((i * i + j * j + k * k) as f64).sqrt();
+                if r < 2.0 * h {
+                    sum += d0 * d0 * d0 * w(r);
+                }
+            }
+        }
+    }
+    sum
 }
 
 /// `x`, or `floor` when `x` is below it; NaN stays NaN (for the finiteness check that follows).

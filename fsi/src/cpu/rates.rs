@@ -168,8 +168,11 @@ fn apply_contact<T: Real>(
 /// marker), and `ρ_w = Σ ρ W / Σ W`. A marker with no soil around it keeps the body's velocity
 /// and zero stress. Markers of an owner with a smooth or frictional contact then go through
 /// [`apply_contact`]; rough ones (and every marker without `contact`) are left as above.
+///
+/// `select(a)` gives the stress of neighbour `a` and the density its hydrostatic step uses,
+/// or `None` to leave it out (a wet scene extrapolates each phase from its own particles).
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>>(
+pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>, S: Fn(usize) -> Option<(Sym3<T>, T)> + Sync>(
     c: &PairConsts<T>,
     marker_pos: &[Vec3<T>],
     marker_vel: &[Vec3<T>],
@@ -180,7 +183,7 @@ pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>>(
     touched: &[u32],
     nl_ms: &NeighborList,
     soil: &[Packed<T>],
-    soil_sigma: &[Sym3<T>],
+    select: S,
     contact: Option<ContactView<'_, T>>,
     out: &mut [Packed<T>],
 ) {
@@ -197,11 +200,12 @@ pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>>(
             if r2 >= c.support2 {
                 continue;
             }
+            let Some((sigma_a, rho_step)) = select(a as usize) else { continue };
             let w = K::w(r2.sqrt(), c.inv_h, c.alpha);
             sw += w;
             sv += pa.v * w;
-            ss += soil_sigma[a as usize] * w;
-            srr += r * (pa.rho * w);
+            ss += sigma_a * w;
+            srr += r * (rho_step * w);
             srho += pa.rho * w;
             scs += pa.cs * w;
         }
@@ -242,7 +246,7 @@ pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>>(
 /// The momentum pair term `(S_a + S_b) ∇W − Π ∇W` with `S = σ/ρ²` and Monaghan's artificial
 /// viscosity on approaching pairs. Exactly antisymmetric under swapping a and b.
 #[inline(always)]
-fn pair_term<T: Real, const VISC: bool>(
+pub(crate) fn pair_term<T: Real, const VISC: bool>(
     c: &PairConsts<T>,
     pa: &Packed<T>,
     pb: &Packed<T>,
@@ -326,22 +330,29 @@ fn neighbour_sums<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: bool, con
 
 /// What one soil particle's neighbours add up to (see [`soil_rates`]).
 #[derive(Clone, Copy, Default)]
-struct PairSums<T> {
-    drho: T,
-    acc: Vec3<T>,
+pub(crate) struct PairSums<T> {
+    pub drho: T,
+    pub acc: Vec3<T>,
     /// Velocity gradient L.
-    l: Mat3<T>,
-    xs: Vec3<T>,
-    gc: Vec3<T>,
-    fs: Sym3<T>,
-    contact: bool,
+    pub l: Mat3<T>,
+    pub xs: Vec3<T>,
+    pub gc: Vec3<T>,
+    pub fs: Sym3<T>,
+    pub contact: bool,
 }
 
 impl<T: Real> PairSums<T> {
     /// Adds neighbour `pb` (a soil particle with `SOIL`, else a marker) of `pa`; nothing when
     /// it is outside the support.
     #[inline(always)]
-    fn add<K: Kernel<T>, const VISC: bool, const XSPH: bool, const PPST: bool, const FS: bool, const SOIL: bool>(
+    pub(crate) fn add<
+        K: Kernel<T>,
+        const VISC: bool,
+        const XSPH: bool,
+        const PPST: bool,
+        const FS: bool,
+        const SOIL: bool,
+    >(
         &mut self,
         c: &PairConsts<T>,
         pa: &Packed<T>,

@@ -14,6 +14,7 @@ mod elastic;
 mod mcc;
 mod params;
 mod root;
+mod water;
 
 pub use calibration::{k0_elastic, k0_jaky, kappa_from_cr, lambda_from_cc, m_from_friction_angle, pc0_from_ocr};
 pub use drucker_prager::{DruckerPrager, cone_from_mohr_coulomb};
@@ -21,6 +22,7 @@ pub use elastic::{Moduli, elastic_increment, jaumann_rate, spin_terms};
 pub use mcc::{MccSafeguards, ModifiedCamClay, P_REF};
 pub use params::{MaterialParams, ModelKind, ParamError};
 pub use root::brent;
+pub use water::{MIN_POROSITY, STANDARD_GRAVITY, Water};
 
 use crate::Real;
 use crate::math::{Sym3, Vec3};
@@ -83,6 +85,8 @@ pub enum Rheology<T> {
     DruckerPrager(DruckerPrager<T>),
     /// Modified Cam Clay.
     Mcc(ModifiedCamClay<T>),
+    /// Water (not a soil: a liquid phase that may share space with the soil).
+    Water(Water<T>),
 }
 
 impl<T> Rheology<T> {
@@ -92,6 +96,7 @@ impl<T> Rheology<T> {
             Self::Elastic => "elastic",
             Self::DruckerPrager(_) => "drucker-prager",
             Self::Mcc(_) => "mcc",
+            Self::Water(_) => "water",
         }
     }
 }
@@ -113,6 +118,12 @@ pub struct Material<T> {
     pub ocr: T,
     /// The model.
     pub rheology: Rheology<T>,
+    /// Hydraulic conductivity k (m/s, at standard gravity) of a soil that water can flow
+    /// through; 0 when not given (the soil then cannot share space with water).
+    pub permeability: T,
+    /// Grain (solid) density ρ_g (kg/m³) of a soil, from which its porosity is
+    /// `n = 1 − ρ / ρ_g`; 0 when not given.
+    pub grain_density: T,
 }
 
 impl<T: Real> Material<T> {
@@ -145,6 +156,8 @@ impl<T: Real> Material<T> {
             }
             Rheology::DruckerPrager(dp) => dp.correct(trial, d),
             Rheology::Mcc(mcc) => mcc.correct(trial, state, moduli),
+            // The solver sets a liquid's stress from its equation of state each stage.
+            Rheology::Water(_) => Ok(trial),
         }
     }
 
@@ -187,8 +200,14 @@ impl<T: Real> Material<T> {
     pub fn k0(&self) -> T {
         match &self.rheology {
             Rheology::Elastic => k0_elastic(self.poisson),
+            Rheology::Water(_) => T::one(),
             _ => k0_jaky(self.friction_angle_deg),
         }
+    }
+
+    /// Whether this is a liquid (the water phase) rather than a soil.
+    pub fn is_water(&self) -> bool {
+        matches!(self.rheology, Rheology::Water(_))
     }
 
     /// Largest elastic wave speed `sqrt((K + 4G/3)/ρ0)` (m/s) over the moduli this material

@@ -6,7 +6,7 @@
 
 use serde::Deserialize;
 
-use super::{DruckerPrager, Material, MccSafeguards, ModifiedCamClay, Moduli, Rheology};
+use super::{DruckerPrager, Material, MccSafeguards, ModifiedCamClay, Moduli, Rheology, Water};
 use super::{kappa_from_cr, lambda_from_cc, m_from_friction_angle};
 use crate::Real;
 
@@ -20,6 +20,8 @@ pub enum ModelKind {
     DruckerPrager,
     /// Modified Cam Clay.
     Mcc,
+    /// Water: a weakly compressible liquid, alone or in the pores of a soil.
+    Water,
 }
 
 impl ModelKind {
@@ -29,6 +31,7 @@ impl ModelKind {
             Self::Elastic => "elastic",
             Self::DruckerPrager => "drucker-prager",
             Self::Mcc => "mcc",
+            Self::Water => "water",
         }
     }
 }
@@ -42,7 +45,7 @@ pub struct MaterialParams {
     pub name: Option<String>,
     /// Scenes only: read the material from this file (relative to the scene) instead.
     pub file: Option<String>,
-    /// `"elastic"`, `"drucker-prager"` or `"mcc"`.
+    /// `"elastic"`, `"drucker-prager"`, `"mcc"` or `"water"`.
     pub model: Option<ModelKind>,
     /// Bulk density (kg/m³).
     pub density: Option<f64>,
@@ -60,8 +63,16 @@ pub struct MaterialParams {
     pub mu_i_i0: Option<f64>,
     /// μ(I): grain diameter (m).
     pub grain_diameter: Option<f64>,
-    /// μ(I): grain (solid) density (kg/m³).
+    /// Grain (solid) density (kg/m³): for μ(I), and for the porosity `1 − density /
+    /// grain_density` of a soil that water flows through.
     pub grain_density: Option<f64>,
+    /// Hydraulic conductivity k (m/s, at standard gravity) of a soil that water flows through
+    /// (needs `grain_density`).
+    pub permeability: Option<f64>,
+    /// Water: numerical sound speed (m/s).
+    pub sound_speed: Option<f64>,
+    /// Water: dynamic viscosity (Pa s).
+    pub viscosity: Option<f64>,
     /// MCC critical-state slope M.
     pub mcc_m: Option<f64>,
     /// MCC swelling slope κ (v–ln p).
@@ -115,12 +126,20 @@ impl MaterialParams {
     /// κ > 0, λ > κ (and says so when they look swapped), M > 0 (or φ), v_λ > 1, OCR ≥ 1;
     /// μ(I) keys come together; keys that do not apply to the model are errors, never ignored.
     pub fn build<T: Real>(&self) -> Result<Material<T>, ParamError> {
-        let model =
-            self.model.ok_or_else(|| err("model", "is required: one of \"elastic\", \"drucker-prager\", \"mcc\""))?;
+        let model = self
+            .model
+            .ok_or_else(|| err("model", "is required: one of \"elastic\", \"drucker-prager\", \"mcc\", \"water\""))?;
         if self.file.is_some() {
             return Err(err("file", "a material read from a file cannot itself name a file"));
         }
         let density = positive("density", require("density", self.density, model)?, " kg/m³")?;
+        if model == ModelKind::Water {
+            return self.build_water(density);
+        }
+        for (k, v) in [("sound_speed", self.sound_speed), ("viscosity", self.viscosity)] {
+            forbid(k, v.is_some(), model, " (it is a water key; set model = \"water\")")?;
+        }
+        let (permeability, grain_density) = self.pore_keys(density)?;
         let young = positive("youngs_modulus", require("youngs_modulus", self.youngs_modulus, model)?, " Pa")?;
         let nu = require("poisson_ratio", self.poisson_ratio, model)?;
         if !(nu > 0.0 && nu < 0.5) {
@@ -131,23 +150,13 @@ impl MaterialParams {
         {
             return Err(err("friction_angle", format!("must be in [0, 90) degrees (got {phi})")));
         }
+        // μ(I) also needs grain_density, which a wet soil may give on its own (`pore_keys`).
         let mu_i_keys = [
             ("mu_i_friction_angle", self.mu_i_friction_angle),
             ("mu_i_i0", self.mu_i_i0),
             ("grain_diameter", self.grain_diameter),
-            ("grain_density", self.grain_density),
         ];
-        let mcc_keys = [
-            ("mcc_m", self.mcc_m.is_some()),
-            ("mcc_kappa", self.mcc_kappa.is_some()),
-            ("mcc_lambda", self.mcc_lambda.is_some()),
-            ("mcc_cr", self.mcc_cr.is_some()),
-            ("mcc_cc", self.mcc_cc.is_some()),
-            ("mcc_v_lambda", self.mcc_v_lambda.is_some()),
-            ("ocr", self.ocr.is_some()),
-            ("mcc_clamp_moduli", self.mcc_clamp_moduli.is_some()),
-            ("mcc_pc_floor", self.mcc_pc_floor.is_some()),
-        ];
+        let mcc_keys = self.mcc_keys();
         let elastic = Moduli::from_young_poisson(T::of(young), T::of(nu));
         let mut material = Material {
             density: T::of(density),
@@ -157,8 +166,11 @@ impl MaterialParams {
             cohesion: T::zero(),
             ocr: T::one(),
             rheology: Rheology::Elastic,
+            permeability: T::of(permeability.unwrap_or(0.0)),
+            grain_density: T::of(grain_density.unwrap_or(0.0)),
         };
         match model {
+            ModelKind::Water => return self.build_water(density),
             ModelKind::Elastic => {
                 forbid("friction_angle", self.friction_angle.is_some(), model, "")?;
                 forbid("cohesion", self.cohesion.is_some(), model, "")?;
@@ -187,7 +199,8 @@ impl MaterialParams {
                 let mut dp = DruckerPrager::from_mohr_coulomb(T::of(phi), T::of(c));
                 let given = mu_i_keys.iter().filter(|(_, v)| v.is_some()).count();
                 if given > 0 {
-                    if let Some((k, _)) = mu_i_keys.iter().find(|(_, v)| v.is_none()) {
+                    let missing = mu_i_keys.iter().copied().chain([("grain_density", self.grain_density)]);
+                    if let Some((k, _)) = missing.into_iter().find(|(_, v)| v.is_none()) {
                         return Err(err(
                             k,
                             "is required when any μ(I) key is given (mu_i_friction_angle, mu_i_i0, grain_diameter, grain_density)",
@@ -313,7 +326,87 @@ impl MaterialParams {
                 });
             }
         }
+        if grain_density.is_some() && permeability.is_none() && self.mu_i_i0.is_none() {
+            return Err(err(
+                "grain_density",
+                "applies with permeability (a soil water flows through) or with the μ(I) keys; give one or drop it",
+            ));
+        }
         Ok(material)
+    }
+
+    /// The Modified Cam Clay keys and whether each is given.
+    fn mcc_keys(&self) -> [(&'static str, bool); 9] {
+        [
+            ("mcc_m", self.mcc_m.is_some()),
+            ("mcc_kappa", self.mcc_kappa.is_some()),
+            ("mcc_lambda", self.mcc_lambda.is_some()),
+            ("mcc_cr", self.mcc_cr.is_some()),
+            ("mcc_cc", self.mcc_cc.is_some()),
+            ("mcc_v_lambda", self.mcc_v_lambda.is_some()),
+            ("ocr", self.ocr.is_some()),
+            ("mcc_clamp_moduli", self.mcc_clamp_moduli.is_some()),
+            ("mcc_pc_floor", self.mcc_pc_floor.is_some()),
+        ]
+    }
+
+    /// `permeability` and `grain_density` of a soil: a conductivity needs the grain density, and
+    /// the grain density must exceed the bulk density (a porosity in (0, 1)).
+    fn pore_keys(&self, density: f64) -> Result<(Option<f64>, Option<f64>), ParamError> {
+        let k = self.permeability.map(|k| positive("permeability", k, " m/s")).transpose()?;
+        let rho_g = self.grain_density.map(|g| positive("grain_density", g, " kg/m³")).transpose()?;
+        if k.is_some() && rho_g.is_none() {
+            return Err(err(
+                "grain_density",
+                "is required with permeability: the porosity is 1 − density / grain_density (quartz sand: 2650 kg/m³)",
+            ));
+        }
+        if let (Some(_), Some(g)) = (k, rho_g)
+            && g <= density
+        {
+            return Err(err(
+                "grain_density",
+                format!(
+                    "must exceed the bulk density {density} kg/m³ (porosity 1 − density / grain_density > 0; got {g})"
+                ),
+            ));
+        }
+        Ok((k, rho_g))
+    }
+
+    /// A liquid: density, sound speed and viscosity; every soil key is refused.
+    fn build_water<T: Real>(&self, density: f64) -> Result<Material<T>, ParamError> {
+        let model = ModelKind::Water;
+        let c = positive("sound_speed", require("sound_speed", self.sound_speed, model)?, " m/s")?;
+        let mu = require("viscosity", self.viscosity, model)?;
+        if mu < 0.0 {
+            return Err(err("viscosity", format!("must be ≥ 0 Pa s (water at 20 °C: 1.0e-3; got {mu})")));
+        }
+        let soil_keys = [
+            ("youngs_modulus", self.youngs_modulus.is_some()),
+            ("poisson_ratio", self.poisson_ratio.is_some()),
+            ("friction_angle", self.friction_angle.is_some()),
+            ("cohesion", self.cohesion.is_some()),
+            ("mu_i_friction_angle", self.mu_i_friction_angle.is_some()),
+            ("mu_i_i0", self.mu_i_i0.is_some()),
+            ("grain_diameter", self.grain_diameter.is_some()),
+            ("grain_density", self.grain_density.is_some()),
+            ("permeability", self.permeability.is_some()),
+        ];
+        for (k, present) in soil_keys.into_iter().chain(self.mcc_keys()) {
+            forbid(k, present, model, " (it is a soil key; give it to the soil the water flows through)")?;
+        }
+        Ok(Material {
+            density: T::of(density),
+            elastic: Moduli { bulk: T::of(density * c * c), shear: T::zero() },
+            poisson: T::of(0.5),
+            friction_angle_deg: T::zero(),
+            cohesion: T::zero(),
+            ocr: T::one(),
+            rheology: Rheology::Water(Water { sound_speed: T::of(c), viscosity: T::of(mu) }),
+            permeability: T::zero(),
+            grain_density: T::zero(),
+        })
     }
 }
 

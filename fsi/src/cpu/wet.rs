@@ -1,0 +1,501 @@
+//! Wet soil: a water phase sharing space with the soil skeleton, coupled by drag and by the
+//! pore pressure (mixture theory, both phases as SPH particles on the same support).
+//!
+//! Per unit volume of mixture, with porosity n, pore pressure p, effective stress σ' and
+//! hydraulic conductivity k (at standard gravity g_n, `γ_w = ρ_w g_n`):
+//!
+//! ```text
+//! water:  n ρ_w a_w = −n ∇p + n ρ_w g − f
+//! soil:   ρ_s a_s   = ∇·σ' − (1 − n) ∇p + ρ_s g + f,      f = (n² γ_w / k) (v_w − v_s)
+//! ```
+//!
+//! so that at steady state `n (v_w − v_s) = −(k / γ_w)(∇p − ρ_w g)` (Darcy) and the soil's
+//! constitutive model acts on the effective stress (Terzaghi). Discretisation:
+//!
+//! - **Porosity by smoothed volume fractions.** `n_a = 1 − Σ_s V^g_s W_as`, the grain volume
+//!   `V^g = m / ρ_g` of the soil particles smoothed by the kernel (boundary markers count as
+//!   soil with the mean solid fraction of the soil next to them, so a wall does not read as a
+//!   pore). A water particle's density ρ̄ is its partial density n ρ_w (continuity over water
+//!   neighbours), its intrinsic density is ρ̄ / n and its pressure follows from that.
+//! - **Water–water pairs** take the usual momentum pair term with the partial stress −n p I,
+//!   i.e. `−∇(n p) / ρ̄`, plus laminar (Morris) viscosity.
+//! - **Soil–water pairs** carry only the interaction. The pore-pressure pair force
+//!   `F_w = −p_w V_w V^g_s ∇_w W` on the water adds `p ∇n / ρ̄`, which turns the water's
+//!   `−∇(n p)` into `−n ∇p`; its reaction on the soil sums to `−V^g_s ∇p` (per unit volume
+//!   `−(1 − n) ∇p`). The drag pair force `F_w = −(n_w² γ_w / k_s) V_w V_s W (v_w − v_s)`
+//!   sums to the drag above (the smooth volume fraction, "SVF", distribution). Both are one
+//!   expression evaluated with the same operands from either side, so they are equal and
+//!   opposite per pair to round-off.
+//! - **Walls** keep two extrapolated records per marker (Adami et al. 2012), one from the soil
+//!   and one from the water, and each phase meets the record of its own phase; the soil's
+//!   pore-pressure term also sees the markers' extrapolated pore pressure, and the water's
+//!   porosity gradient and drag see the markers as soil at the wall's velocity.
+//!
+//! The explicit drag is stable for `dt < 2 / λ` with `λ = Σ C V W / m` per particle (about
+//! `n g_n / k` for water); the time step is held below `1 / λ`.
+
+use rayon::prelude::*;
+
+use crate::Real;
+use crate::kernel::Kernel;
+use crate::math::{Sym3, Vec3};
+use crate::rheology::{MIN_POROSITY, Material, Moduli, Rheology, STANDARD_GRAVITY, Water, jaumann_rate};
+
+use super::neighbors::NeighborList;
+use super::rates::{Packed, PairConsts, PairSums, Rate};
+
+/// The water of a wet scene (one water material).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct WetSetup<T> {
+    /// The liquid.
+    pub water: Water<T>,
+    /// Rest density ρ_w (kg/m³).
+    pub rest: T,
+    /// Unit weight at standard gravity `ρ_w g_n` (N/m³), which turns conductivities into
+    /// drag coefficients.
+    pub gamma: T,
+    /// `1 / Σ d0³ W` over the cubic lattice the particles start on. The kernel sum of a
+    /// lattice is not exactly 1 (Wendland C2 at h = 1.2 d0 sums to about 1.06), and the
+    /// porosity and the drag are kernel sums of volumes: scaled by this, the undisturbed
+    /// lattice reads its nominal porosity and the full drag.
+    pub inv_lattice_sum: T,
+}
+
+impl<T: Real> WetSetup<T> {
+    /// The water of `materials`: `None` for a dry scene; an error when there are two water
+    /// materials or a soil without `permeability` shares the scene with water. `lattice_sum`
+    /// is the kernel's sum over the particles' starting lattice.
+    pub fn of(materials: &[Material<T>], lattice_sum: f64) -> Result<Option<Self>, String> {
+        let mut found = None;
+        for m in materials {
+            if let Rheology::Water(w) = m.rheology {
+                if found.is_some() {
+                    return Err("a scene holds at most one water material".into());
+                }
+                found = Some(Self {
+                    water: w,
+                    rest: m.density,
+                    gamma: m.density * T::of(STANDARD_GRAVITY),
+                    inv_lattice_sum: T::of(1.0 / lattice_sum),
+                });
+            }
+        }
+        if found.is_some()
+            && let Some(i) = materials.iter().position(|m| !m.is_water() && m.permeability <= T::zero())
+        {
+            return Err(format!(
+                "material {i} shares the scene with water but has no permeability (and grain_density)"
+            ));
+        }
+        Ok(found)
+    }
+}
+
+/// What a particle brings to the phase coupling that does not change during a step.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Phase<T> {
+    pub water: bool,
+    /// Soil: grain volume `m / ρ_g` (m³); water: 0.
+    pub vg: T,
+    /// Soil: `1 / k` (s/m); water: 0.
+    pub inv_k: T,
+}
+
+/// What the porosity pass finds for a particle at a stage.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Pore<T> {
+    /// Water: porosity n; soil: 0.
+    pub n: T,
+    /// Water: pore pressure p (Pa, compression positive); soil: 0.
+    pub p: T,
+    /// Water: `n² γ_w` (N/m³); soil: 0.
+    pub cw: T,
+    /// Soil: the fraction of its pores water fills (kernel sum of water volume over that of
+    /// soil volume, at most 1); water: 0.
+    pub sat: T,
+}
+
+/// A touched marker's share of the coupling: its solid volume (`V_m` times the mean solid
+/// fraction of the soil around it), the mean `1 / k` of that soil, the extrapolated pore
+/// pressure, and the wall's own velocity.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct MarkerPore<T> {
+    pub vg: T,
+    pub inv_k: T,
+    pub p: T,
+    pub vel: Vec3<T>,
+}
+
+/// The phase of each of the first `phase.len()` particles (grain volumes scaled by the
+/// lattice sum, see [`WetSetup::inv_lattice_sum`]).
+pub(crate) fn phases<T: Real>(
+    setup: &WetSetup<T>,
+    materials: &[Material<T>],
+    material: &[u16],
+    mass: &[T],
+    phase: &mut [Phase<T>],
+) {
+    phase.par_iter_mut().enumerate().for_each(|(i, ph)| {
+        let m = &materials[material[i] as usize];
+        *ph = if m.is_water() {
+            Phase { water: true, vg: T::zero(), inv_k: T::zero() }
+        } else {
+            Phase {
+                water: false,
+                vg: mass[i] / m.grain_density * setup.inv_lattice_sum,
+                inv_k: T::one() / m.permeability,
+            }
+        };
+    });
+}
+
+/// The soil-side share of each touched marker (`vg`, `inv_k`, `vel`), from the soil listed
+/// in its row of `nl_ms`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn marker_solids<T: Real, K: Kernel<T>>(
+    c: &PairConsts<T>,
+    marker_pos: &[Vec3<T>],
+    marker_vel: &[Vec3<T>],
+    marker_volume: T,
+    touched: &[u32],
+    nl_ms: &NeighborList,
+    soil: &[Packed<T>],
+    phase: &[Phase<T>],
+    out: &mut [MarkerPore<T>],
+) {
+    out.par_iter_mut().enumerate().for_each(|(k, o)| {
+        let m = touched[k] as usize;
+        let (mut sw, mut sf, mut sk) = (T::zero(), T::zero(), T::zero());
+        for &a in nl_ms.of(k) {
+            let (pa, ph) = (&soil[a as usize], &phase[a as usize]);
+            if ph.water {
+                continue;
+            }
+            let r2 = (marker_pos[m] - pa.x).norm2();
+            if r2 >= c.support2 {
+                continue;
+            }
+            let w = K::w(r2.sqrt(), c.inv_h, c.alpha);
+            sw += w;
+            sf += ph.vg / pa.vol * w;
+            sk += ph.inv_k * w;
+        }
+        let tiny = T::min_positive_value().sqrt();
+        *o = if sw > tiny {
+            MarkerPore { vg: marker_volume * sf / sw, inv_k: sk / sw, p: T::zero(), vel: marker_vel[m] }
+        } else {
+            MarkerPore { vel: marker_vel[m], ..MarkerPore::default() }
+        };
+    });
+}
+
+/// The porosity pass: for each water particle its porosity (smoothed solid fraction, markers
+/// included but for `permeable` ones), pore pressure and partial stress (written into its record, `s = −n p I / ρ̄²`);
+/// for each soil particle its saturation.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn porosity<T: Real, K: Kernel<T>>(
+    c: &PairConsts<T>,
+    setup: &WetSetup<T>,
+    nl_ss: &NeighborList,
+    nl_sm: &NeighborList,
+    phase: &[Phase<T>],
+    marker_solid: &[MarkerPore<T>],
+    permeable: &[bool],
+    markers_x: impl Fn(usize) -> Vec3<T> + Sync,
+    packed: &mut [Packed<T>],
+    pore: &mut [Pore<T>],
+) {
+    let records: &[Packed<T>] = packed;
+    let found: Vec<(Pore<T>, Option<Sym3<T>>)> = (0..pore.len())
+        .into_par_iter()
+        .map(|a| {
+            let pa = &records[a];
+            let water = phase[a].water;
+            let (mut solid, mut vw, mut vs) = (T::zero(), T::zero(), T::zero());
+            for &b in nl_ss.of(a) {
+                let pb = &records[b as usize];
+                let r2 = (pa.x - pb.x).norm2();
+                if r2 >= c.support2 {
+                    continue;
+                }
+                let w = K::w(r2.sqrt(), c.inv_h, c.alpha);
+                if phase[b as usize].water {
+                    vw += pb.vol * w;
+                } else {
+                    solid += phase[b as usize].vg * w;
+                    vs += pb.vol * w;
+                }
+            }
+            if water {
+                for &m in nl_sm.of(a) {
+                    if permeable[m as usize] {
+                        continue;
+                    }
+                    let r2 = (pa.x - markers_x(m as usize)).norm2();
+                    if r2 < c.support2 {
+                        solid += marker_solid[m as usize].vg * K::w(r2.sqrt(), c.inv_h, c.alpha);
+                    }
+                }
+                let n = (T::one() - solid).max(T::of(MIN_POROSITY));
+                let p = setup.water.pressure(pa.rho / n, setup.rest);
+                let s = Sym3::iso(-(n * p) / (pa.rho * pa.rho));
+                (Pore { n, p, cw: n * n * setup.gamma, sat: T::zero() }, Some(s))
+            } else {
+                // The particle's own volume is in the soil sum (W(0)), so it is never empty.
+                vs += pa.vol * K::w(T::zero(), c.inv_h, c.alpha);
+                let sat = (vw / vs).min(T::one());
+                (Pore { sat, ..Pore::default() }, None)
+            }
+        })
+        .collect();
+    packed.par_iter_mut().zip(pore.par_iter_mut()).zip(found.into_par_iter()).for_each(|((pk, po), (f, s))| {
+        *po = f;
+        if let Some(s) = s {
+            pk.s = s;
+        }
+    });
+}
+
+/// The water-side share of each touched marker: the pore pressure extrapolated from the water
+/// in its row of `nl_ms`, with the hydrostatic step `ρ_w (g − a) · (x_m − x_b)`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn marker_pressures<T: Real, K: Kernel<T>>(
+    c: &PairConsts<T>,
+    setup: &WetSetup<T>,
+    marker_pos: &[Vec3<T>],
+    marker_acc: &[Vec3<T>],
+    touched: &[u32],
+    nl_ms: &NeighborList,
+    soil: &[Packed<T>],
+    phase: &[Phase<T>],
+    pore: &[Pore<T>],
+    out: &mut [MarkerPore<T>],
+) {
+    out.par_iter_mut().enumerate().for_each(|(k, o)| {
+        let m = touched[k] as usize;
+        let xw = marker_pos[m];
+        let (mut sw, mut sp, mut sr) = (T::zero(), T::zero(), Vec3::zero());
+        for &a in nl_ms.of(k) {
+            if !phase[a as usize].water {
+                continue;
+            }
+            let r = xw - soil[a as usize].x;
+            let r2 = r.norm2();
+            if r2 >= c.support2 {
+                continue;
+            }
+            let w = K::w(r2.sqrt(), c.inv_h, c.alpha);
+            sw += w;
+            sp += pore[a as usize].p * w;
+            sr += r * w;
+        }
+        let tiny = T::min_positive_value().sqrt();
+        o.p = if sw > tiny {
+            ((sp + setup.rest * (c.gravity - marker_acc[m]).dot(sr)) / sw).max(T::zero())
+        } else {
+            T::zero()
+        };
+    });
+}
+
+/// The phase-coupling force on particle `a` from particle `b` of the other phase (N): pore
+/// pressure and drag, one expression from either side (water operands first), so the two
+/// evaluations of a pair are exact negatives. The drag's kernel weight is scaled by
+/// `inv_sum` ([`WetSetup::inv_lattice_sum`]). Also returns the drag coefficient `C V_a V_b W`
+/// (kg/s) for the time-step bound.
+#[inline(always)]
+fn coupling<T: Real, K: Kernel<T>>(
+    c: &PairConsts<T>,
+    pa: &Packed<T>,
+    pb: &Packed<T>,
+    a_water: bool,
+    (pw, cw, vg, inv_k): (T, T, T, T),
+    inv_sum: T,
+) -> (Vec3<T>, T) {
+    let r = pa.x - pb.x;
+    let r2 = r.norm2();
+    if r2 >= c.support2 {
+        return (Vec3::zero(), T::zero());
+    }
+    let rr = r2.sqrt();
+    let gw = r * K::grad_factor(rr, c.inv_h, c.alpha);
+    let w = K::w(rr, c.inv_h, c.alpha);
+    let (vw, vs) = if a_water { (pa.vol, pb.vol) } else { (pb.vol, pa.vol) };
+    let drag = cw * inv_k * (vw * vs) * (w * inv_sum);
+    (-(gw * (pw * vw * vg)) - (pa.v - pb.v) * drag, drag)
+}
+
+/// Soil and water rates of the awake particles of a wet scene: same-phase pairs as in the dry
+/// loop ([`super::rates::soil_rates`]), cross-phase pairs through the coupling only, each
+/// phase meeting its own record of the markers (`m_soil`, `m_water`). Water passes through
+/// `permeable` markers (a filter stone holds the soil, not the water); the soil still feels
+/// the pore pressure extrapolated to them.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn wet_rates<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: bool, const PPST: bool, const FS: bool>(
+    c: &PairConsts<T>,
+    setup: &WetSetup<T>,
+    soil: &[Packed<T>],
+    m_soil: &[Packed<T>],
+    m_water: &[Packed<T>],
+    (m_pore, permeable): (&[MarkerPore<T>], &[bool]),
+    phase: &[Phase<T>],
+    pore: &[Pore<T>],
+    (nl_ss, nl_sm): (&NeighborList, &NeighborList),
+    sigma: &[Sym3<T>],
+    moduli: &[Moduli<T>],
+    out: &mut [Rate<T>],
+    drag_rate: &mut [T],
+) {
+    let mu = setup.water.viscosity;
+    out.par_iter_mut().zip(drag_rate.par_iter_mut()).enumerate().for_each(|(a, (out, lambda))| {
+        let pa = &soil[a];
+        let (pha, poa) = (phase[a], pore[a]);
+        let mut sums = PairSums::default();
+        let (mut f, mut drag, mut diffusion) = (Vec3::zero(), T::zero(), T::zero());
+        for &b in nl_ss.of(a) {
+            let b = b as usize;
+            let pb = &soil[b];
+            if phase[b].water == pha.water {
+                sums.add::<K, VISC, XSPH, PPST, FS, true>(c, pa, pb);
+                if pha.water {
+                    if mu > T::zero() {
+                        f += laminar::<T, K>(c, mu, pa, pb);
+                    }
+                    diffusion += density_diffusion::<T, K>(c, setup, pa, pb, pa.rho / poa.n, pb.rho / pore[b].n);
+                }
+            } else {
+                let k = if pha.water {
+                    (poa.p, poa.cw, phase[b].vg, phase[b].inv_k)
+                } else {
+                    (pore[b].p, pore[b].cw, pha.vg, pha.inv_k)
+                };
+                let (fi, d) = coupling::<T, K>(c, pa, pb, pha.water, k, setup.inv_lattice_sum);
+                f += fi;
+                drag += d;
+            }
+        }
+        let records = if pha.water { m_water } else { m_soil };
+        for &w in nl_sm.of(a) {
+            let w = w as usize;
+            if pha.water && permeable[w] {
+                continue;
+            }
+            sums.add::<K, VISC, XSPH, PPST, FS, false>(c, pa, &records[w]);
+            let mp = &m_pore[w];
+            // The marker as the other phase: soil at the wall's velocity for the water, the
+            // extrapolated pore pressure for the soil.
+            let wall = Packed { v: mp.vel, ..records[w] };
+            let k = if pha.water { (poa.p, poa.cw, mp.vg, mp.inv_k) } else { (mp.p, T::zero(), pha.vg, T::zero()) };
+            let (fi, d) = coupling::<T, K>(c, pa, &wall, pha.water, k, setup.inv_lattice_sum);
+            f += fi;
+            drag += d;
+        }
+        let inv_m = T::one() / pa.mass;
+        out.moduli = moduli[a];
+        let d = sums.l.sym();
+        out.drho = sums.drho * pa.rho;
+        if pha.water {
+            out.drho += T::of(DELTA_SPH) * c.h * setup.water.sound_speed * poa.n * diffusion;
+        }
+        out.acc = sums.acc + f * inv_m + c.gravity;
+        out.d = d;
+        out.dsigma = if pha.water { Sym3::zero() } else { jaumann_rate(&sigma[a], &d, sums.l.skew(), out.moduli) };
+        out.xsph = sums.xs;
+        out.grad_c = sums.gc;
+        if FS {
+            out.fs = sums.fs.min_eigenvalue();
+            out.contact = sums.contact;
+        }
+        *lambda = drag * inv_m;
+    });
+}
+
+/// The δ-SPH coefficient δ of the water's density diffusion (Molteni & Colagrossi 2009; 0.1 is
+/// the usual value).
+pub(crate) const DELTA_SPH: f64 = 0.1;
+
+/// The water's density diffusion between `a` and `b` (before the factor `δ h c n_a`): the
+/// Laplacian `2 Σ V_b (ψ_b − ψ_a − ψ^H_ab) (r·∇W) / (r² + η²)` of the intrinsic density ψ,
+/// less its hydrostatic part `ψ^H_ab = ρ_w g·(x_b − x_a) / c²` (Antuono et al. 2012), so that
+/// a column at rest is not diffused out of hydrostatic balance. It damps the odd–even pressure
+/// mode the sum-form pressure term cannot see.
+#[inline(always)]
+fn density_diffusion<T: Real, K: Kernel<T>>(
+    c: &PairConsts<T>,
+    setup: &WetSetup<T>,
+    pa: &Packed<T>,
+    pb: &Packed<T>,
+    psi_a: T,
+    psi_b: T,
+) -> T {
+    let r = pa.x - pb.x;
+    let r2 = r.norm2();
+    if r2 >= c.support2 {
+        return T::zero();
+    }
+    let cw = setup.water.sound_speed;
+    let hydro = setup.rest * c.gravity.dot(r) / (cw * cw);
+    let rgw = r2 * K::grad_factor(r2.sqrt(), c.inv_h, c.alpha);
+    T::of(2.0) * pb.vol * (psi_a - psi_b - hydro) * rgw / (r2 + c.eta2)
+}
+
+/// Morris et al. (1997) laminar viscous force on `a` from `b` (N):
+/// `m_a m_b (μ_a + μ_b) (r·∇W) / (ρ_a ρ_b (r² + η²)) v_ab`, antisymmetric in a and b.
+#[inline(always)]
+fn laminar<T: Real, K: Kernel<T>>(c: &PairConsts<T>, mu: T, pa: &Packed<T>, pb: &Packed<T>) -> Vec3<T> {
+    let r = pa.x - pb.x;
+    let r2 = r.norm2();
+    if r2 >= c.support2 {
+        return Vec3::zero();
+    }
+    // r·∇W = r² F(r) ≤ 0.
+    let rgw = r2 * K::grad_factor(r2.sqrt(), c.inv_h, c.alpha);
+    let k = (pa.vol * pb.vol) * (mu + mu) * rgw / (r2 + c.eta2);
+    (pa.v - pb.v) * k
+}
+
+/// Force (N) on each touched marker from the wet mixture: minus the same-phase pair terms each
+/// awake particle receives from the marker's record of its phase, and minus the coupling
+/// forces (see [`wet_rates`]).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn wet_marker_forces<T: Real, K: Kernel<T>>(
+    c: &PairConsts<T>,
+    (visc, inv_sum): (bool, T),
+    soil: &[Packed<T>],
+    (m_soil, m_water): (&[Packed<T>], &[Packed<T>]),
+    (m_pore, permeable): (&[MarkerPore<T>], &[bool]),
+    phase: &[Phase<T>],
+    pore: &[Pore<T>],
+    nl_ms: &NeighborList,
+    out: &mut [Vec3<T>],
+) {
+    out.par_iter_mut().enumerate().for_each(|(k, out)| {
+        let mp = &m_pore[k];
+        let mut f = Vec3::zero();
+        for &a in nl_ms.of(k) {
+            let Some(pa) = soil.get(a as usize) else { continue };
+            let (pha, poa) = (phase[a as usize], pore[a as usize]);
+            if pha.water && permeable[k] {
+                continue;
+            }
+            let pw = if pha.water { &m_water[k] } else { &m_soil[k] };
+            let r = pa.x - pw.x;
+            let r2 = r.norm2();
+            if r2 >= c.support2 {
+                continue;
+            }
+            let gw = r * K::grad_factor(r2.sqrt(), c.inv_h, c.alpha);
+            let vab = pa.v - pw.v;
+            let term = if visc {
+                super::rates::pair_term::<T, true>(c, pa, pw, r, r2, gw, vab)
+            } else {
+                super::rates::pair_term::<T, false>(c, pa, pw, r, r2, gw, vab)
+            };
+            f -= term * (pa.mass * pw.mass);
+            let wall = Packed { v: mp.vel, ..*pw };
+            let kk = if pha.water { (poa.p, poa.cw, mp.vg, mp.inv_k) } else { (mp.p, T::zero(), pha.vg, T::zero()) };
+            f -= coupling::<T, K>(c, pa, &wall, pha.water, kk, inv_sum).0;
+        }
+        *out = f;
+    });
+}

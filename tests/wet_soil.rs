@@ -1,0 +1,226 @@
+//! Wet soil (issue 18): a water phase sharing space with the soil, coupled by drag and pore
+//! pressure. A saturated bed at rest carries hydrostatic pore pressure and the effective
+//! geostatic stress of the buoyant soil.
+
+use crate::common;
+
+use regolith::build::build_soil;
+use regolith::fsi::Real;
+
+const WATER: &str =
+    "[[materials]]\nname = \"water\"\nmodel = \"water\"\ndensity = 1000\nsound_speed = 100\nviscosity = 1e-3\n";
+
+fn soil(permeability: f64) -> String {
+    format!(
+        "[[materials]]\nname = \"sand\"\nmodel = \"drucker-prager\"\ndensity = 1600\ngrain_density = 2650\n\
+         permeability = {permeability}\nyoungs_modulus = 1e7\npoisson_ratio = 0.3\nfriction_angle = 30.0\n"
+    )
+}
+
+/// A 0.15 m sand bed saturated to its surface in a 0.1 m square box.
+fn saturated_bed(end: f64) -> String {
+    format!(
+        "[simulation]\nend_time = {end}\nprecision = \"f64\"\n\n[sph]\nspacing = 0.01\n\n{}{WATER}\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.1, 0.1, 0.2]\n\n[terrain]\nmaterial = \"sand\"\ndepth = 0.15\n\n\
+         [[water_blocks]]\nmaterial = \"water\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.1, 0.1, 0.15]\n",
+        soil(1e-3)
+    )
+}
+
+/// Layer means over the central columns (three spacings from the walls) at heights `z`: the
+/// water's pore pressure and the soil's vertical effective stress (Pa, compression positive).
+fn layer_means(s: &regolith::fsi::cpu::CpuSph<f64>, d0: f64, width: f64, z: &[f64]) -> Vec<(f64, f64)> {
+    let mats = s.materials();
+    let mut sums = vec![(0.0, 0.0, 0.0, 0.0); z.len()];
+    for i in 0..s.active() {
+        let x = s.positions()[i].as_f64();
+        let inside = |c: f64| (3.0 * d0..width - 3.0 * d0).contains(&c);
+        let Some(l) = z.iter().position(|z| (x[2] - z).abs() < 0.3 * d0) else { continue };
+        if !(inside(x[0]) && inside(x[1])) {
+            continue;
+        }
+        let szz = -s.stresses()[i].as_f64()[2];
+        let e = &mut sums[l];
+        if mats[s.material_ids()[i] as usize].is_water() {
+            e.0 += szz;
+            e.1 += 1.0;
+        } else {
+            e.2 += szz;
+            e.3 += 1.0;
+        }
+    }
+    sums.iter().map(|e| (e.0 / e.1, e.2 / e.3)).collect()
+}
+
+/// The pore pressure sits about 22 Pa (the head of 0.22 d0) below γ_w × depth at every depth:
+/// the water's free surface acts about a quarter spacing lower than the soil's half-cell
+/// convention puts it (the kernel is truncated there and the water carries no tension). That
+/// offset is checked at mid-depth and half-way up (below 0.3 ρ_w g d0), the 3 % at mid-depth
+/// (0.105 m down), where the offset is 2 %; the effective stress is within 3 % at both. The
+/// two layers next to the floor (within the kernel's reach of its markers) read up to 40 Pa
+/// off: the wall's extrapolated pore pressure is first order there.
+#[test]
+fn a_saturated_bed_at_rest_carries_hydrostatic_pore_pressure_and_the_buoyant_effective_stress() {
+    let scene = common::scene(&saturated_bed(0.06));
+    let mut m = build_soil::<f64>(&scene).expect("builds");
+    let d0 = scene.solver.spacing;
+    let z = [5.0 * d0, 10.0 * d0];
+    let x0: Vec<[f64; 3]> = m.solver.as_cpu().expect("cpu").positions().iter().map(|p| p.as_f64()).collect();
+    let (mut max_speed, mut steps, mut samples) = (0.0_f64, 0, 0.0);
+    let mut mean = vec![(0.0, 0.0); z.len()];
+    while m.solver.time() < scene.end_time {
+        let r = m.solver.step(Some(scene.end_time - m.solver.time())).expect("step");
+        max_speed = max_speed.max(r.max_speed);
+        steps += 1;
+        // Means over the second half: the water column rings at about 0.2 kHz (c = 100 m/s).
+        if m.solver.time() > 0.5 * scene.end_time && steps % 10 == 0 {
+            let s = m.solver.as_cpu().expect("cpu");
+            for (acc, v) in mean.iter_mut().zip(layer_means(s, d0, 0.1, &z)) {
+                acc.0 += v.0;
+                acc.1 += v.1;
+            }
+            samples += 1.0;
+        }
+    }
+    let s = m.solver.as_cpu().expect("a CPU scene");
+    let n = s.active();
+    assert_eq!(n, s.len(), "nothing escaped");
+    let mats = s.materials();
+    let g = -scene.solver.gravity[2];
+    // The top layer's cells reach half a spacing above it.
+    let top = 0.15 + 0.5 * d0;
+    let (rho_s, rho_w) = (mats[0].density.as_f64(), mats[1].density.as_f64());
+    let porosity = 1.0 - rho_s / mats[0].grain_density.as_f64();
+    let buoyant = rho_s + porosity * rho_w - rho_w;
+    for (z, (p, sv)) in z.iter().zip(&mean) {
+        let (p, sv) = (p / samples, sv / samples);
+        let (p_ref, sv_ref) = (rho_w * g * (top - z), buoyant * g * (top - z));
+        let (ep, es) = (p / p_ref - 1.0, sv / sv_ref - 1.0);
+        eprintln!(
+            "z = {z:.3}: p = {p:.1} Pa (γw depth = {p_ref:.1}, {:+.2} %), σ'v = {sv:.1} Pa (γ' depth = {sv_ref:.1}, {:+.2} %)",
+            100.0 * ep,
+            100.0 * es
+        );
+        assert!(
+            (p - p_ref).abs() < 0.3 * rho_w * g * d0,
+            "pore pressure at z = {z}: {p:.1} Pa against {p_ref:.1} Pa, more than the head of 0.3 d0 apart"
+        );
+        if top - z > 0.1 {
+            assert!(ep.abs() < 0.03, "pore pressure at z = {z}: {p:.1} Pa against {p_ref:.1} Pa");
+        }
+        assert!(es.abs() < 0.03, "effective stress at z = {z}: {sv:.1} Pa against {sv_ref:.1} Pa");
+    }
+    let moved = s.positions()[..n]
+        .iter()
+        .map(|p| p.as_f64())
+        .zip(s.ids()[..n].iter().map(|&i| x0[i as usize]))
+        .map(|(p, q)| (0..3).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    eprintln!("{steps} steps, max speed {max_speed:.3e} m/s, largest displacement {moved:.3e} m");
+    // No drift: nothing moves a hundredth of a spacing; the speeds are those of the ringing
+    // (a 20 Pa wave moves water at 20 / (ρ c) = 2e-4 m/s).
+    assert!(moved < 0.01 * d0, "a particle moved {moved:.3e} m");
+    assert!(max_speed < 2e-3, "max speed {max_speed:.3e} m/s");
+}
+
+/// A sand layer (from z = 0.1 m up to `0.1 + layer`) on a filter stone (a body water passes
+/// through) under `above` m of water, in a 0.08 m square column with an empty sump below;
+/// spacing `d0`.
+fn filter_column(d0: f64, layer: f64, above: f64, end: f64) -> String {
+    let top = 0.1 + layer + above;
+    format!(
+        "[simulation]\nend_time = {end}\nprecision = \"f64\"\n\n[sph]\nspacing = {d0}\n\n{}{WATER}\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.08, 0.08, {h}]\n\n\
+         [[soil_blocks]]\nmaterial = \"sand\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.1]\nmax = [0.08, 0.08, {zs}]\n\n\
+         [[water_blocks]]\nmaterial = \"water\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.1]\nmax = [0.08, 0.08, {top}]\n\n\
+         [[bodies]]\nname = \"filter\"\nshape = {{ type = \"box\", size = [{w}, {w}, {t}] }}\nmass = 1.0\n\
+         position = [0.04, 0.04, {zc}]\nmotion = {{ type = \"fixed\" }}\nfsi = true\npermeable = true\n",
+        soil(1e-3),
+        h = top + 0.05,
+        zs = 0.1 + layer,
+        w = 0.08 - d0,
+        t = 3.0 * d0,
+        zc = 0.1 - 1.5 * d0,
+    )
+}
+
+/// The Darcy flux `q = Σ_w (m_w / ρ_w) v_w,z / Σ_s m_s / ρ_s` through the soil between `z0`
+/// and `z1` (water volume flux per unit area of mixture; downward negative) and the slope
+/// dp/dz of the pore pressure there (least squares over the water particles).
+fn flux_and_gradient(s: &regolith::fsi::cpu::CpuSph<f64>, z0: f64, z1: f64) -> (f64, f64) {
+    let mats = s.materials();
+    let (mut flux, mut volume) = (0.0, 0.0);
+    let (mut n, mut sz, mut sp, mut szz, mut szp) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for i in 0..s.active() {
+        let x = s.positions()[i].as_f64();
+        if !(z0..z1).contains(&x[2]) {
+            continue;
+        }
+        let mat = &mats[s.material_ids()[i] as usize];
+        let m = s.masses()[i].as_f64();
+        if mat.is_water() {
+            flux += m / mat.density.as_f64() * s.velocities()[i].as_f64()[2];
+            let p = -s.stresses()[i].as_f64()[2];
+            n += 1.0;
+            sz += x[2];
+            sp += p;
+            szz += x[2] * x[2];
+            szp += x[2] * p;
+        } else {
+            volume += m / s.densities()[i].as_f64();
+        }
+    }
+    (flux / volume, (n * szp - sz * sp) / (n * szz - sz * sz))
+}
+
+/// Steady seepage through a 0.1 m layer (10 spacings) under 0.1 m of water: Darcy's law holds
+/// inside the layer within 5 % (measured +3.8 %: the flux against the pore-pressure gradient
+/// fitted there), and within 10 % against the imposed heads (measured +7.0 %: the layer acts
+/// about 0.65 d0 thinner, the drag being smoothed over h across its faces, and at its
+/// underside no water is left below to take that share). Both errors fall with d0
+/// (docs/two_phase.md).
+#[test]
+fn water_seeps_through_a_sand_layer_on_a_filter_stone_at_the_darcy_rate() {
+    let (d0, layer, above) = (0.01, 0.1, 0.1);
+    let scene = common::scene(&filter_column(d0, layer, above, 0.12));
+    let mut a = regolith::build::assemble::<f64>(&scene).unwrap_or_else(|e| panic!("{e}"));
+    let end = scene.end_time;
+    let (mut q_sum, mut grad_sum, mut samples) = (0.0, 0.0, 0.0);
+    let mut steps = 0;
+    while a.system.fluid.time() < end {
+        a.system.advance(Some(end - a.system.fluid.time())).unwrap_or_else(|e| panic!("{e}"));
+        steps += 1;
+        if a.system.fluid.time() > 0.5 * end && steps % 10 == 0 {
+            let s = a.system.fluid.as_cpu().expect("cpu");
+            // The soil's inside, more than 2h from its faces (it spans 0.1 + d0/2 to 0.1 +
+            // layer + d0/2).
+            let reach = 2.0 * scene.solver.h();
+            let (q, g) = flux_and_gradient(s, 0.1 + 0.5 * d0 + reach, 0.1 + layer + 0.5 * d0 - reach);
+            q_sum += q;
+            grad_sum += g;
+            samples += 1.0;
+        }
+    }
+    let s = a.system.fluid.as_cpu().expect("cpu");
+    let mats = s.materials();
+    let k = mats[0].permeability.as_f64();
+    let gamma = mats[1].density.as_f64() * 9.80665;
+    let g = -scene.solver.gravity[2];
+    let (q, dpdz) = (q_sum / samples, grad_sum / samples);
+    // Head from the water's surface to the layer's underside (where the water leaves into the
+    // empty sump at zero pressure), over the layer.
+    let gradient = (layer + above) / layer;
+    let q_global = -k * gradient * g / 9.80665;
+    // Locally: q = −k (dh/dz) with h = z + p / γ_w (gravity g).
+    let q_local = -k * (dpdz / gamma + g / 9.80665);
+    eprintln!(
+        "{steps} exchanges; q = {q:.4e} m/s; Darcy with the imposed heads {q_global:.4e} ({:+.2} %), \
+         with the measured gradient {q_local:.4e} ({:+.2} %); dp/dz = {dpdz:.1} Pa/m",
+        100.0 * (q / q_global - 1.0),
+        100.0 * (q / q_local - 1.0)
+    );
+    assert!((q / q_local - 1.0).abs() < 0.05, "q = {q:.4e} m/s against k i = {q_local:.4e} m/s inside the layer");
+    assert!((q / q_global - 1.0).abs() < 0.10, "q = {q:.4e} m/s against k Δh / L = {q_global:.4e} m/s");
+    // The soil stays on the filter.
+    assert_eq!(s.active(), s.len(), "nothing escaped");
+}
