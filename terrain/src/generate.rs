@@ -14,6 +14,12 @@
 //! (the infinite-slope state: `∂σ_iz/∂z + ρ g_i = 0`), so a tilted bed starts in
 //! equilibrium too. MCC points get `p_c0 = OCR · p0` and their specific volume from the
 //! compression lines.
+//!
+//! Water regions (a water material) may overlap soil: a lattice point holding both is
+//! saturated, its water particle's partial density `n ρ_w` (n = 1 − ρ / ρ_g of the soil there,
+//! 1 in free water). The pore pressure is hydrostatic from the water above the point, the total
+//! stress carries the weight of soil and water above, and the soil starts at the effective
+//! stress, the total plus the pore pressure (so a saturated bed is buoyed: γ' = γ_sat − γ_w).
 
 use std::collections::{BTreeMap, HashMap};
 

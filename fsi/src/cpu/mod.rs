@@ -1025,6 +1025,7 @@ impl<T: Real> CpuSph<T> {
             &mut self.packed[..m],
             &mut self.pore[..m],
         );
+        wet::soil_pressures::<T, K>(&c, &self.nl_ss, &self.packed[..m], &self.phase[..m], &mut self.pore[..m]);
     }
 
     /// A rate evaluation of a wet scene (see [`wet`]); the dry one is [`Self::evaluate_k`].
@@ -1074,8 +1075,8 @@ impl<T: Real> CpuSph<T> {
             pore,
             &mut self.m_pore,
         );
-        // The water's record: its partial stress −n p I; walls are smooth or rough for it as
-        // for the soil.
+        // The water's record: its stress −p I, stepped with its intrinsic density; walls are
+        // smooth or rough for it as for the soil.
         rates::extrapolate_markers::<T, K, _>(
             &c,
             &self.ms_pos,
@@ -1087,7 +1088,7 @@ impl<T: Real> CpuSph<T> {
             &self.touched,
             &self.nl_ms,
             packed,
-            |a| phase[a].water.then(|| (Sym3::iso(-(pore[a].n * pore[a].p)), packed[a].rho)),
+            |a| phase[a].water.then(|| (Sym3::iso(-pore[a].p), packed[a].rho / pore[a].n)),
             contact,
             &mut self.m_packed_w,
         );
@@ -1118,7 +1119,7 @@ impl<T: Real> CpuSph<T> {
         if with_forces {
             wet::wet_marker_forces::<T, K>(
                 &c,
-                (visc, setup.inv_lattice_sum),
+                (visc, (setup.inv_lattice_sum, setup.lattice_sum)),
                 &self.packed[..n],
                 (&self.m_packed, &self.m_packed_w),
                 (&self.m_pore, &self.m_permeable),

@@ -13,23 +13,28 @@
 //! constitutive model acts on the effective stress (Terzaghi). Discretisation:
 //!
 //! - **Porosity by smoothed volume fractions.** `n_a = 1 − Σ_s V^g_s W_as`, the grain volume
-//!   `V^g = m / ρ_g` of the soil particles smoothed by the kernel (boundary markers count as
-//!   soil with the mean solid fraction of the soil next to them, so a wall does not read as a
-//!   pore). A water particle's density ρ̄ is its partial density n ρ_w (continuity over water
-//!   neighbours), its intrinsic density is ρ̄ / n and its pressure follows from that.
-//! - **Water–water pairs** take the usual momentum pair term with the partial stress −n p I,
-//!   i.e. `−∇(n p) / ρ̄`, plus laminar (Morris) viscosity.
+//!   `V^g = m / ρ_g` of the soil particles smoothed by the kernel and divided by the kernel's
+//!   sum over the starting lattice (so that the undisturbed soil reads its nominal porosity);
+//!   boundary markers count as soil with the mean solid fraction of the soil next to them, so
+//!   a wall does not read as a pore. A water particle's density ρ̄ is its partial density
+//!   n ρ_w (continuity over water neighbours), its intrinsic density is ρ̄ / n and its
+//!   pressure follows from that.
+//! - **Water–water pairs** take the usual momentum pair term with the stress −p I, i.e.
+//!   `−∇p / ρ̄`, laminar (Morris) viscosity and δ-SPH density diffusion of the intrinsic
+//!   density with its hydrostatic part removed.
 //! - **Soil–water pairs** carry only the interaction. The pore-pressure pair force
-//!   `F_w = −p_w V_w V^g_s ∇_w W` on the water adds `p ∇n / ρ̄`, which turns the water's
-//!   `−∇(n p)` into `−n ∇p`; its reaction on the soil sums to `−V^g_s ∇p` (per unit volume
-//!   `−(1 − n) ∇p`). The drag pair force `F_w = −(n_w² γ_w / k_s) V_w V_s W (v_w − v_s)`
-//!   sums to the drag above (the smooth volume fraction, "SVF", distribution). Both are one
-//!   expression evaluated with the same operands from either side, so they are equal and
-//!   opposite per pair to round-off.
+//!   `F_w = −(p_w − p̂_s) V_w V^g_s ∇_w W` (p̂_s the pore pressure interpolated at the soil
+//!   particle) sums on the water to `+(1 − n) ∇p` per unit volume, which turns its `−∇p` into
+//!   `−n ∇p`, and on the soil to `−(1 − n) ∇p`; the difference form keeps both exact for a
+//!   uniform pressure whatever the particle disorder. The drag pair force
+//!   `F_w = −(n_w² γ_w / k_s) V_w V_s W (v_w − v_s)` sums to the drag above (the smooth volume
+//!   fraction, "SVF", distribution). Both are one expression evaluated with the same operands
+//!   from either side, so they are equal and opposite per pair to round-off.
 //! - **Walls** keep two extrapolated records per marker (Adami et al. 2012), one from the soil
 //!   and one from the water, and each phase meets the record of its own phase; the soil's
 //!   pore-pressure term also sees the markers' extrapolated pore pressure, and the water's
-//!   porosity gradient and drag see the markers as soil at the wall's velocity.
+//!   porosity gradient and drag see the markers as soil at the wall's velocity. Markers of a
+//!   permeable owner (a filter stone) are invisible to the water.
 //!
 //! The explicit drag is stable for `dt < 2 / λ` with `λ = Σ C V W / m` per particle (about
 //! `n g_n / k` for water); the time step is held below `1 / λ`.
@@ -55,10 +60,15 @@ pub(crate) struct WetSetup<T> {
     /// drag coefficients.
     pub gamma: T,
     /// `1 / Σ d0³ W` over the cubic lattice the particles start on. The kernel sum of a
-    /// lattice is not exactly 1 (Wendland C2 at h = 1.2 d0 sums to about 1.06), and the
+    /// lattice is not exactly 1 (Wendland C2 at h = 1.2 d0 sums to 1.017), and the
     /// porosity and the drag are kernel sums of volumes: scaled by this, the undisturbed
     /// lattice reads its nominal porosity and the full drag.
     pub inv_lattice_sum: T,
+    /// The lattice sum itself: the pore-pressure coupling takes the grain volumes unscaled,
+    /// so that its gradient sum carries the same lattice moment as the water's own pressure
+    /// term and the two cancel to `n ∇p` (scaled, they would leave `(M − (1 − n)) ∇p`, an
+    /// error of the moment amplified by 1 / n).
+    pub lattice_sum: T,
 }
 
 impl<T: Real> WetSetup<T> {
@@ -77,6 +87,7 @@ impl<T: Real> WetSetup<T> {
                     rest: m.density,
                     gamma: m.density * T::of(STANDARD_GRAVITY),
                     inv_lattice_sum: T::of(1.0 / lattice_sum),
+                    lattice_sum: T::of(lattice_sum),
                 });
             }
         }
@@ -106,13 +117,49 @@ pub(crate) struct Phase<T> {
 pub(crate) struct Pore<T> {
     /// Water: porosity n; soil: 0.
     pub n: T,
-    /// Water: pore pressure p (Pa, compression positive); soil: 0.
+    /// Pore pressure p (Pa, compression positive): the water's own; at a soil particle, the
+    /// water's interpolated there ([`soil_pressures`]).
     pub p: T,
     /// Water: `n² γ_w` (N/m³); soil: 0.
     pub cw: T,
     /// Soil: the fraction of its pores water fills (kernel sum of water volume over that of
     /// soil volume, at most 1); water: 0.
     pub sat: T,
+}
+
+/// The pore pressure at each soil particle, interpolated from the water around it (Shepard:
+/// `Σ V_w p_w W / Σ V_w W`; 0 where there is none), after [`porosity`] gave the water theirs.
+pub(crate) fn soil_pressures<T: Real, K: Kernel<T>>(
+    c: &PairConsts<T>,
+    nl_ss: &NeighborList,
+    packed: &[Packed<T>],
+    phase: &[Phase<T>],
+    pore: &mut [Pore<T>],
+) {
+    let found: Vec<T> = (0..pore.len())
+        .into_par_iter()
+        .map(|a| {
+            if phase[a].water {
+                return pore[a].p;
+            }
+            let pa = &packed[a];
+            let (mut sw, mut sp) = (T::zero(), T::zero());
+            for &b in nl_ss.of(a) {
+                let b = b as usize;
+                if !phase[b].water {
+                    continue;
+                }
+                let r2 = (pa.x - packed[b].x).norm2();
+                if r2 < c.support2 {
+                    let w = packed[b].vol * K::w(r2.sqrt(), c.inv_h, c.alpha);
+                    sw += w;
+                    sp += pore[b].p * w;
+                }
+            }
+            if sw > T::min_positive_value().sqrt() { sp / sw } else { T::zero() }
+        })
+        .collect();
+    pore.par_iter_mut().zip(found.into_par_iter()).for_each(|(po, p)| po.p = p);
 }
 
 /// A touched marker's share of the coupling: its solid volume (`V_m` times the mean solid
@@ -238,7 +285,7 @@ pub(crate) fn porosity<T: Real, K: Kernel<T>>(
                 }
                 let n = (T::one() - solid).max(T::of(MIN_POROSITY));
                 let p = setup.water.pressure(pa.rho / n, setup.rest);
-                let s = Sym3::iso(-(n * p) / (pa.rho * pa.rho));
+                let s = Sym3::iso(-p / (pa.rho * pa.rho));
                 (Pore { n, p, cw: n * n * setup.gamma, sat: T::zero() }, Some(s))
             } else {
                 // The particle's own volume is in the soil sum (W(0)), so it is never empty.
@@ -309,8 +356,8 @@ fn coupling<T: Real, K: Kernel<T>>(
     pa: &Packed<T>,
     pb: &Packed<T>,
     a_water: bool,
-    (pw, cw, vg, inv_k): (T, T, T, T),
-    inv_sum: T,
+    (dp, cw, vg, inv_k): (T, T, T, T),
+    (inv_sum, sum): (T, T),
 ) -> (Vec3<T>, T) {
     let r = pa.x - pb.x;
     let r2 = r.norm2();
@@ -322,7 +369,7 @@ fn coupling<T: Real, K: Kernel<T>>(
     let w = K::w(rr, c.inv_h, c.alpha);
     let (vw, vs) = if a_water { (pa.vol, pb.vol) } else { (pb.vol, pa.vol) };
     let drag = cw * inv_k * (vw * vs) * (w * inv_sum);
-    (-(gw * (pw * vw * vg)) - (pa.v - pb.v) * drag, drag)
+    (-(gw * (dp * vw * (vg * sum))) - (pa.v - pb.v) * drag, drag)
 }
 
 /// Soil and water rates of the awake particles of a wet scene: same-phase pairs as in the dry
@@ -365,11 +412,11 @@ pub(crate) fn wet_rates<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: boo
                 }
             } else {
                 let k = if pha.water {
-                    (poa.p, poa.cw, phase[b].vg, phase[b].inv_k)
+                    (poa.p - pore[b].p, poa.cw, phase[b].vg, phase[b].inv_k)
                 } else {
-                    (pore[b].p, pore[b].cw, pha.vg, pha.inv_k)
+                    (pore[b].p - poa.p, pore[b].cw, pha.vg, pha.inv_k)
                 };
-                let (fi, d) = coupling::<T, K>(c, pa, pb, pha.water, k, setup.inv_lattice_sum);
+                let (fi, d) = coupling::<T, K>(c, pa, pb, pha.water, k, (setup.inv_lattice_sum, setup.lattice_sum));
                 f += fi;
                 drag += d;
             }
@@ -385,8 +432,12 @@ pub(crate) fn wet_rates<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: boo
             // The marker as the other phase: soil at the wall's velocity for the water, the
             // extrapolated pore pressure for the soil.
             let wall = Packed { v: mp.vel, ..records[w] };
-            let k = if pha.water { (poa.p, poa.cw, mp.vg, mp.inv_k) } else { (mp.p, T::zero(), pha.vg, T::zero()) };
-            let (fi, d) = coupling::<T, K>(c, pa, &wall, pha.water, k, setup.inv_lattice_sum);
+            let k = if pha.water {
+                (poa.p - mp.p, poa.cw, mp.vg, mp.inv_k)
+            } else {
+                (mp.p - poa.p, T::zero(), pha.vg, T::zero())
+            };
+            let (fi, d) = coupling::<T, K>(c, pa, &wall, pha.water, k, (setup.inv_lattice_sum, setup.lattice_sum));
             f += fi;
             drag += d;
         }
@@ -460,7 +511,7 @@ fn laminar<T: Real, K: Kernel<T>>(c: &PairConsts<T>, mu: T, pa: &Packed<T>, pb: 
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn wet_marker_forces<T: Real, K: Kernel<T>>(
     c: &PairConsts<T>,
-    (visc, inv_sum): (bool, T),
+    (visc, sums): (bool, (T, T)),
     soil: &[Packed<T>],
     (m_soil, m_water): (&[Packed<T>], &[Packed<T>]),
     (m_pore, permeable): (&[MarkerPore<T>], &[bool]),
@@ -493,8 +544,12 @@ pub(crate) fn wet_marker_forces<T: Real, K: Kernel<T>>(
             };
             f -= term * (pa.mass * pw.mass);
             let wall = Packed { v: mp.vel, ..*pw };
-            let kk = if pha.water { (poa.p, poa.cw, mp.vg, mp.inv_k) } else { (mp.p, T::zero(), pha.vg, T::zero()) };
-            f -= coupling::<T, K>(c, pa, &wall, pha.water, kk, inv_sum).0;
+            let kk = if pha.water {
+                (poa.p - mp.p, poa.cw, mp.vg, mp.inv_k)
+            } else {
+                (mp.p - poa.p, T::zero(), pha.vg, T::zero())
+            };
+            f -= coupling::<T, K>(c, pa, &wall, pha.water, kk, sums).0;
         }
         *out = f;
     });
