@@ -904,21 +904,29 @@ impl<T: Real> CpuSph<T> {
         }
     }
 
-    fn evaluate_k<K: Kernel<T>>(&mut self, from_stage: bool, with_forces: bool) {
-        if self.wet.is_some() {
-            return self.evaluate_wet::<K>(from_stage, with_forces);
-        }
-        // Rates for the awake particles; records for the awake and extended ones.
-        let (n, m) = (self.awake, self.near);
+    /// Packs the records and moduli of the awake and extended particles from the current state
+    /// or (`from_stage`) the midpoint one.
+    fn pack(&mut self, from_stage: bool) {
+        let m = self.near;
         let (pos, vel, rho, sigma, state) = if from_stage {
             (&self.s_pos[..m], &self.s_vel[..m], &self.s_rho[..m], &self.s_sigma[..m], &self.s_state[..m])
         } else {
             (&self.pos[..m], &self.vel[..m], &self.rho[..m], &self.sigma[..m], &self.state[..m])
         };
-        let c = self.consts;
         let view =
             rates::SoilView { pos, vel, rho, sigma, state, material: &self.material[..m], mass: &self.mass[..m] };
         rates::pack_soil(&self.materials, &view, &mut self.packed[..m], &mut self.moduli[..m]);
+    }
+
+    fn evaluate_k<K: Kernel<T>>(&mut self, from_stage: bool, with_forces: bool) {
+        if let Some(setup) = self.wet {
+            return self.evaluate_wet::<K>(setup, from_stage, with_forces);
+        }
+        // Rates for the awake particles; records for the awake and extended ones.
+        let (n, m) = (self.awake, self.near);
+        self.pack(from_stage);
+        let sigma = if from_stage { &self.s_sigma[..m] } else { &self.sigma[..m] };
+        let c = self.consts;
         self.c_max = self.packed[..n].par_iter().map(|p| p.cs.as_f64()).reduce(|| self.ref_cs.as_f64(), f64::max);
         rates::extrapolate_markers::<T, K, _>(
             &c,
@@ -983,18 +991,11 @@ impl<T: Real> CpuSph<T> {
     /// The packing and marker passes of a wet evaluation, up to the porosity: records packed,
     /// phases known, the markers' solid shares, the water's porosity, pressure and partial
     /// stress, the soil's saturation.
-    fn wet_pores<K: Kernel<T>>(&mut self, from_stage: bool) {
+    fn wet_pores<K: Kernel<T>>(&mut self, setup: &wet::WetSetup<T>, from_stage: bool) {
         let m = self.near;
-        let (pos, vel, rho, sigma, state) = if from_stage {
-            (&self.s_pos[..m], &self.s_vel[..m], &self.s_rho[..m], &self.s_sigma[..m], &self.s_state[..m])
-        } else {
-            (&self.pos[..m], &self.vel[..m], &self.rho[..m], &self.sigma[..m], &self.state[..m])
-        };
         let c = self.consts;
-        let setup = self.wet.expect("wet scene");
-        let view =
-            rates::SoilView { pos, vel, rho, sigma, state, material: &self.material[..m], mass: &self.mass[..m] };
-        rates::pack_soil(&self.materials, &view, &mut self.packed[..m], &mut self.moduli[..m]);
+        self.pack(from_stage);
+        let setup = *setup;
         wet::phases(&setup, &self.materials, &self.material[..m], &self.mass[..m], &mut self.phase[..m]);
         wet::marker_solids::<T, K>(
             &c,
@@ -1029,12 +1030,12 @@ impl<T: Real> CpuSph<T> {
     }
 
     /// A rate evaluation of a wet scene (see [`wet`]); the dry one is [`Self::evaluate_k`].
-    fn evaluate_wet<K: Kernel<T>>(&mut self, from_stage: bool, with_forces: bool) {
-        self.wet_pores::<K>(from_stage);
+    fn evaluate_wet<K: Kernel<T>>(&mut self, setup: wet::WetSetup<T>, from_stage: bool, with_forces: bool) {
+        self.wet_pores::<K>(&setup, from_stage);
         let (n, m) = (self.awake, self.near);
         let sigma = if from_stage { &self.s_sigma[..m] } else { &self.sigma[..m] };
         let c = self.consts;
-        let setup = self.wet.expect("wet scene");
+
         self.c_max = self.packed[..n].par_iter().map(|p| p.cs.as_f64()).reduce(|| self.ref_cs.as_f64(), f64::max);
         let contact = (!self.owner_mu.is_empty()).then_some(rates::ContactView {
             orig: &self.ms_orig,
@@ -1135,11 +1136,11 @@ impl<T: Real> CpuSph<T> {
     /// starts and the pore pressure it was given (its initial stress −p I): `ρ̄ = n ρ_w(p)`, so
     /// that the discrete porosity, not the nominal one, starts the water at that pressure.
     fn init_water(&mut self) {
+        let Some(setup) = self.wet else { return };
         match self.cfg.kernel {
-            KernelKind::Wendland => self.wet_pores::<WendlandC2>(false),
-            KernelKind::Cubic => self.wet_pores::<CubicSpline>(false),
+            KernelKind::Wendland => self.wet_pores::<WendlandC2>(&setup, false),
+            KernelKind::Cubic => self.wet_pores::<CubicSpline>(&setup, false),
         }
-        let setup = self.wet.expect("wet scene");
         let m = self.near;
         let (phase, pore, sigma) = (&self.phase[..m], &self.pore[..m], &self.sigma[..m]);
         self.rho[..m].par_iter_mut().enumerate().for_each(|(i, r)| {

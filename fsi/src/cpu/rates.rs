@@ -246,7 +246,7 @@ pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>, S: Fn(usize) -> Option<
 /// The momentum pair term `(S_a + S_b) ∇W − Π ∇W` with `S = σ/ρ²` and Monaghan's artificial
 /// viscosity on approaching pairs. Exactly antisymmetric under swapping a and b.
 #[inline(always)]
-pub(crate) fn pair_term<T: Real, const VISC: bool>(
+fn pair_term<T: Real, const VISC: bool>(
     c: &PairConsts<T>,
     pa: &Packed<T>,
     pb: &Packed<T>,
@@ -408,15 +408,26 @@ pub(crate) fn marker_forces<T: Real, K: Kernel<T>, const VISC: bool>(
         let mut f = Vec3::zero();
         for &a in nl_ms.of(k) {
             let Some(pa) = soil.get(a as usize) else { continue };
-            let r = pa.x - pw.x;
-            let r2 = r.norm2();
-            if r2 >= c.support2 {
-                continue;
-            }
-            let gw = r * K::grad_factor(r2.sqrt(), c.inv_h, c.alpha);
-            let vab = pa.v - pw.v;
-            f -= pair_term::<T, VISC>(c, pa, pw, r, r2, gw, vab) * (pa.mass * pw.mass);
+            f -= marker_pair::<T, K, VISC>(c, pa, pw);
         }
         *out = f;
     });
+}
+
+/// The force (N) a marker `pw` exerts on particle `pa` through the momentum pair term, zero
+/// outside the support: what [`marker_forces`] subtracts for each neighbour.
+#[inline(always)]
+pub(crate) fn marker_pair<T: Real, K: Kernel<T>, const VISC: bool>(
+    c: &PairConsts<T>,
+    pa: &Packed<T>,
+    pw: &Packed<T>,
+) -> Vec3<T> {
+    let r = pa.x - pw.x;
+    let r2 = r.norm2();
+    if r2 >= c.support2 {
+        return Vec3::zero();
+    }
+    let gw = r * K::grad_factor(r2.sqrt(), c.inv_h, c.alpha);
+    let vab = pa.v - pw.v;
+    pair_term::<T, VISC>(c, pa, pw, r, r2, gw, vab) * (pa.mass * pw.mass)
 }

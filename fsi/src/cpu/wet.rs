@@ -530,19 +530,11 @@ pub(crate) fn wet_marker_forces<T: Real, K: Kernel<T>>(
                 continue;
             }
             let pw = if pha.water { &m_water[k] } else { &m_soil[k] };
-            let r = pa.x - pw.x;
-            let r2 = r.norm2();
-            if r2 >= c.support2 {
-                continue;
-            }
-            let gw = r * K::grad_factor(r2.sqrt(), c.inv_h, c.alpha);
-            let vab = pa.v - pw.v;
-            let term = if visc {
-                super::rates::pair_term::<T, true>(c, pa, pw, r, r2, gw, vab)
+            f -= if visc {
+                super::rates::marker_pair::<T, K, true>(c, pa, pw)
             } else {
-                super::rates::pair_term::<T, false>(c, pa, pw, r, r2, gw, vab)
+                super::rates::marker_pair::<T, K, false>(c, pa, pw)
             };
-            f -= term * (pa.mass * pw.mass);
             let wall = Packed { v: mp.vel, ..*pw };
             let kk = if pha.water {
                 (poa.p - mp.p, poa.cw, mp.vg, mp.inv_k)
