@@ -32,6 +32,10 @@ pub trait Real:
     fn as_f64(self) -> f64;
     /// Name used in reports: `"f32"` or `"f64"`.
     const NAME: &'static str;
+    /// The soil pair loop gathers neighbours into blocks for packed SIMD arithmetic
+    /// (`cpu::lanes`): pays with four f32 lanes per SSE register, not with two f64 ones
+    /// (measured in BENCHMARKS.md), which run the scalar loop.
+    const PAIR_BLOCKS: bool;
 }
 
 impl Real for f64 {
@@ -44,6 +48,7 @@ impl Real for f64 {
         self
     }
     const NAME: &'static str = "f64";
+    const PAIR_BLOCKS: bool = false;
 }
 
 impl Real for f32 {
@@ -56,4 +61,5 @@ impl Real for f32 {
         f64::from(self)
     }
     const NAME: &'static str = "f32";
+    const PAIR_BLOCKS: bool = true;
 }

@@ -15,6 +15,7 @@
 //!    evaluation and a symplectic (velocity-first) update.
 
 mod grid;
+mod lanes;
 mod neighbors;
 mod rates;
 mod wet;

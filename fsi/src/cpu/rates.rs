@@ -290,7 +290,12 @@ pub(crate) fn soil_rates<
     out.par_iter_mut().enumerate().for_each(|(a, out)| {
         let pa = &soil[a];
         out.moduli = moduli[a];
-        let sums = neighbour_sums::<T, K, VISC, XSPH, PPST, FS>(c, pa, nl_ss.of(a), nl_sm.of(a), soil, markers);
+        let (ss, sm) = (nl_ss.of(a), nl_sm.of(a));
+        let sums = if T::PAIR_BLOCKS {
+            super::lanes::neighbour_sums::<T, K, VISC, XSPH, PPST, FS>(c, pa, ss, sm, soil, markers)
+        } else {
+            neighbour_sums::<T, K, VISC, XSPH, PPST, FS>(c, pa, ss, sm, soil, markers)
+        };
         let d = sums.l.sym();
         let spin = sums.l.skew();
         out.drho = sums.drho * pa.rho;
@@ -306,11 +311,19 @@ pub(crate) fn soil_rates<
     });
 }
 
-/// Sums over one soil particle's neighbours (`ss`: soil, `sm`: markers). Sums in locals, each
-/// neighbour kind in its own inlined loop: the compiler keeps the accumulators in registers
-/// instead of calling a closure per pair.
+/// Sums over one soil particle's neighbours (`ss`: soil, `sm`: markers), one pair at a time
+/// (for `f64`; `f32` takes [`super::lanes::neighbour_sums`]). Sums in locals, each neighbour
+/// kind in its own inlined loop: the compiler keeps the accumulators in registers instead of
+/// calling a closure per pair.
 #[inline(always)]
-fn neighbour_sums<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: bool, const PPST: bool, const FS: bool>(
+pub(crate) fn neighbour_sums<
+    T: Real,
+    K: Kernel<T>,
+    const VISC: bool,
+    const XSPH: bool,
+    const PPST: bool,
+    const FS: bool,
+>(
     c: &PairConsts<T>,
     pa: &Packed<T>,
     ss: &[u32],
