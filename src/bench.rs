@@ -1,4 +1,5 @@
-//! `regolith bench`: a fixed granular block collapse, timed.
+//! `regolith bench`: a fixed granular block collapse, timed; or the sand column collapse
+//! other codes publish figures for (`--scene column`).
 //!
 //! A block of soil `n × n × 2n` particles (n chosen from the requested count) stands in the
 //! corner of a container three blocks wide and collapses under gravity: the neighbour grid
@@ -39,6 +40,8 @@ impl BenchModel {
 /// One bench result.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct BenchResult {
+    /// Which scene: `block` or `column`.
+    pub scene: &'static str,
     /// Rheology.
     pub model: &'static str,
     /// Backend.
@@ -55,6 +58,10 @@ pub struct BenchResult {
     pub seconds: f64,
     /// Soil particles × steps / s.
     pub particle_steps_per_s: f64,
+    /// Mean time step of the timed steps (s).
+    pub dt_mean: f64,
+    /// Simulated seconds per wall second over the timed steps.
+    pub sim_s_per_wall_s: f64,
     /// Neighbour interactions (soil–soil and soil–marker pairs, each rate evaluation) per s.
     pub interactions_per_s: f64,
     /// Mean neighbours per soil particle.
@@ -107,15 +114,45 @@ pub fn bench_scene(particles: usize, model: BenchModel, precision: Precision) ->
     load_scene_source(Path::new("<bench>"), &text, &[])
 }
 
-/// Runs the bench: `warmup` untimed steps, then `steps` timed ones.
-pub fn run_bench(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -> Result<BenchResult, RunError> {
+/// `regolith bench --scene column`: the sand column collapse of issue 13's comparison with
+/// Taichi's MLS-MPM example. A column 0.2 m long (x), 0.4 m wide (y, the container's width)
+/// and 0.4 m tall, d0 = 7.8 mm (26 × 51 × 51 lattice points: 67 626 particles),
+/// Drucker–Prager sand (φ = 30°, E = 1 MPa, ν = 0.3, ρ = 1600 kg/m³), stands at one end of a
+/// 1.0 m long container and collapses along x. Same solver settings as the block bench.
+pub fn column_scene(precision: Precision) -> Result<Scene, InputError> {
+    let text = format!(
+        "[simulation]\nend_time = 10.0\ndt = \"auto\"\nintegrator = \"rk2\"\nprecision = \"{prec}\"\n\n\
+         [sph]\nspacing = 0.0078\nh_factor = 1.2\nkernel = \"wendland\"\nartificial_viscosity = 0.5\nshifting = \"xsph\"\n\n\
+         [[materials]]\nname = \"sand\"\nmodel = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 1e6\npoisson_ratio = 0.3\nfriction_angle = 30.0\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [1.0, 0.4056, 0.6]\n\n\
+         [[soil_blocks]]\nmaterial = \"sand\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.2028, 0.4056, 0.4017]\n",
+        prec = precision.name(),
+    );
+    load_scene_source(Path::new("<bench column>"), &text, &[])
+}
+
+/// Runs the bench on `scene` (named `scene_name` in the result): `warmup` untimed steps, then
+/// `steps` timed ones.
+pub fn run_bench(
+    scene_name: &'static str,
+    scene: &Scene,
+    model: BenchModel,
+    warmup: u64,
+    steps: u64,
+) -> Result<BenchResult, RunError> {
     match scene.precision {
-        Precision::F32 => bench_t::<f32>(scene, model, warmup, steps),
-        Precision::F64 => bench_t::<f64>(scene, model, warmup, steps),
+        Precision::F32 => bench_t::<f32>(scene_name, scene, model, warmup, steps),
+        Precision::F64 => bench_t::<f64>(scene_name, scene, model, warmup, steps),
     }
 }
 
-fn bench_t<T: Real>(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -> Result<BenchResult, RunError> {
+fn bench_t<T: Real>(
+    scene_name: &'static str,
+    scene: &Scene,
+    model: BenchModel,
+    warmup: u64,
+    steps: u64,
+) -> Result<BenchResult, RunError> {
     let mut m = build_soil::<T>(scene)?;
     for _ in 0..warmup {
         m.solver.step(None)?;
@@ -124,13 +161,16 @@ fn bench_t<T: Real>(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -
     let builds0 = m.solver.as_cpu().map_or(0, |c| c.list_builds());
     let retries0 = m.solver.as_cpu().map_or(0, |c| c.stage_retries());
     let start = Instant::now();
-    let mut pairs = 0.0;
+    let (mut pairs, mut simulated) = (0.0, 0.0);
     for _ in 0..steps {
-        pairs += m.solver.step(None)?.pairs as f64;
+        let r = m.solver.step(None)?;
+        pairs += r.pairs as f64;
+        simulated += r.dt;
     }
     let secs = start.elapsed().as_secs_f64();
     let n = m.solver.active();
     Ok(BenchResult {
+        scene: scene_name,
         model: model.name(),
         backend: m.solver.backend().into(),
         precision: T::NAME,
@@ -139,6 +179,8 @@ fn bench_t<T: Real>(scene: &Scene, model: BenchModel, warmup: u64, steps: u64) -
         steps,
         seconds: secs,
         particle_steps_per_s: n as f64 * steps as f64 / secs,
+        dt_mean: simulated / steps as f64,
+        sim_s_per_wall_s: simulated / secs,
         interactions_per_s: pairs * evals / secs,
         neighbours_per_particle: pairs / (steps as f64 * n as f64),
         threads: rayon::current_num_threads(),

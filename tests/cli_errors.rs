@@ -371,3 +371,32 @@ fn calibrate_triaxial_flags_and_materials_are_checked_before_running() {
         "--num-cpus: must be a number > 0",
     );
 }
+
+#[test]
+fn bench_flags_that_do_not_apply_to_the_scene_are_one_line_errors() {
+    assert_one_line_error(&["bench", "--scene", "column", "--particles", "5000"], "--particles");
+    assert_one_line_error(&["bench", "--scene", "column", "--model", "mcc"], "applies to --scene block only");
+    assert_one_line_error(&["bench", "--scene", "wheel-long", "--model", "dp"], "--model");
+    assert_one_line_error(&["bench", "--scene", "column", "--active", "on"], "--active");
+    assert_one_line_error(&["bench", "--particles", "10"], "--particles");
+}
+
+/// The column bench builds its 67 626-particle column and reports dt and the simulated time
+/// per wall second (one timed step: the figure itself belongs in BENCHMARKS.md).
+#[test]
+fn the_column_bench_reports_its_particles_dt_and_simulated_rate() {
+    let json = std::env::temp_dir().join(format!("regolith-column-bench-{}.json", std::process::id()));
+    let j = json.to_string_lossy().to_string();
+    let (code, stdout, err) = regolith(&["bench", "--scene", "column", "--steps", "1", "--warmup", "0", "--json", &j]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("bench column"), "{stdout}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("json")).expect("parse");
+    let r = &v[0];
+    assert_eq!(r["scene"], "column");
+    assert_eq!(r["particles"], 67_626);
+    let dt = r["dt_mean"].as_f64().expect("dt");
+    // The acoustic CFL step of E = 1 MPa sand at h = 9.36 mm is of order 1e-4 s.
+    assert!(dt > 1e-5 && dt < 1e-3, "dt = {dt}");
+    assert!(r["sim_s_per_wall_s"].as_f64().expect("rate") > 0.0);
+    std::fs::remove_file(&json).ok();
+}

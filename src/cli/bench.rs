@@ -5,7 +5,7 @@ use std::path::Path;
 use anyhow::Context;
 
 use super::{ActiveArg, BackendArg, BenchModelArg, Failure, Precision};
-use crate::bench::{BenchModel, bench_scene, run_bench, run_wheel_long, wheel_long_scene};
+use crate::bench::{BenchModel, bench_scene, column_scene, run_bench, run_wheel_long, wheel_long_scene};
 use crate::input::InputError;
 use crate::scene;
 
@@ -20,10 +20,16 @@ fn skins(skin: &[f64]) -> Result<Vec<Option<f64>>, Failure> {
     Ok(if skin.is_empty() { vec![None] } else { skin.iter().copied().map(Some).collect() })
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The scene of `run`: the block (of about `particles`, default 100 000, and `model`, default
+/// both) or the column.
+pub(super) struct Kind {
+    pub column: bool,
+    pub particles: Option<usize>,
+    pub model: Option<BenchModelArg>,
+}
+
 pub(super) fn run(
-    particles: usize,
-    model: BenchModelArg,
+    kind: Kind,
     backend: BackendArg,
     precision: Precision,
     skin: &[f64],
@@ -31,6 +37,7 @@ pub(super) fn run(
     warmup: u64,
     json: Option<&Path>,
 ) -> Result<(), Failure> {
+    let particles = kind.particles.unwrap_or(100_000);
     if !(1_000..=50_000_000).contains(&particles) {
         return Err(InputError::flag("--particles", format!("must be in 1000..=50000000 (got {particles})")).into());
     }
@@ -41,7 +48,7 @@ pub(super) fn run(
         Precision::F32 => scene::Precision::F32,
         Precision::F64 => scene::Precision::F64,
     };
-    let models = match model {
+    let models = match kind.model.unwrap_or(if kind.column { BenchModelArg::Dp } else { BenchModelArg::Both }) {
         BenchModelArg::Dp => vec![BenchModel::DruckerPrager],
         BenchModelArg::Mcc => vec![BenchModel::Mcc],
         BenchModelArg::Both => vec![BenchModel::DruckerPrager, BenchModel::Mcc],
@@ -49,7 +56,8 @@ pub(super) fn run(
     let skins = skins(skin)?;
     let mut results = Vec::new();
     for (m, skin) in models.into_iter().flat_map(|m| skins.iter().map(move |&s| (m, s))) {
-        let mut scene = bench_scene(particles, m, prec)?;
+        let (name, mut scene) =
+            if kind.column { ("column", column_scene(prec)?) } else { ("block", bench_scene(particles, m, prec)?) };
         if let Some(s) = skin {
             scene.solver.neighbor_skin = s;
         }
@@ -71,9 +79,10 @@ pub(super) fn run(
             )
             .into());
         }
-        let r = run_bench(&scene, m, warmup, steps).context("bench run failed")?;
+        let r = run_bench(name, &scene, m, warmup, steps).context("bench run failed")?;
         println!(
-            "bench {:<15} {} {} skin {} h: {} particles, {} markers, {} steps ({} list builds, {} steps redone) in {:.2} s: {:.3e} particle-steps/s, {:.3e} listed pairs/s ({:.1} listed neighbours/particle, {} threads, adapter {})",
+            "bench {} {:<15} {} {} skin {} h: {} particles, {} markers, {} steps ({} list builds, {} steps redone) in {:.2} s: {:.3e} particle-steps/s, {:.3e} listed pairs/s ({:.1} listed neighbours/particle, {} threads, adapter {}); dt {:.3e} s, {:.3e} simulated s per wall s",
+            r.scene,
             r.model,
             r.backend,
             r.precision,
@@ -88,7 +97,9 @@ pub(super) fn run(
             r.interactions_per_s,
             r.neighbours_per_particle,
             r.threads,
-            r.adapter
+            r.adapter,
+            r.dt_mean,
+            r.sim_s_per_wall_s
         );
         results.push(r);
     }

@@ -78,6 +78,8 @@ pub enum BackendArg {
 pub enum BenchSceneArg {
     /// The granular block collapse.
     Block,
+    /// The 0.2 × 0.4 × 0.4 m sand column collapse at d0 = 7.8 mm (67 626 particles).
+    Column,
     /// A grousered wheel at 30 % slip crossing a long bed.
     WheelLong,
 }
@@ -625,7 +627,7 @@ pub enum Command {
     /// Time a fixed granular block collapse (particle-steps/s, neighbour interactions/s), or a
     /// wheel crossing a long bed with and without an active region (`--scene wheel-long`).
     Bench {
-        /// Which bench: the soil block, or a wheel at 30 % slip on a long bed.
+        /// Which bench: the soil block, the sand column, or a wheel at 30 % slip on a long bed.
         #[arg(long, value_enum, default_value_t = BenchSceneArg::Block)]
         scene: BenchSceneArg,
         /// wheel-long only: run with the active region on, off, or both (the ratio in one run).
@@ -639,12 +641,12 @@ pub enum Command {
         /// default.
         #[arg(long, value_name = "S,…", value_delimiter = ',')]
         skin: Vec<f64>,
-        /// Soil particles (about).
-        #[arg(long, value_name = "N", default_value_t = 100_000)]
-        particles: usize,
-        /// Rheology: dp, mcc or both.
-        #[arg(long, value_enum, default_value_t = BenchModelArg::Both)]
-        model: BenchModelArg,
+        /// block only: soil particles (about; default 100 000).
+        #[arg(long, value_name = "N")]
+        particles: Option<usize>,
+        /// block only: rheology, dp, mcc or both (default both).
+        #[arg(long, value_enum)]
+        model: Option<BenchModelArg>,
         /// Backend.
         #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
         backend: BackendArg,
@@ -697,6 +699,15 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             Err(InputError::flag("--skin", "does not apply to --carve".to_string()).into())
         }
         Command::Bench { carve: true, json, .. } => bench::carve(json.as_deref()),
+        Command::Bench { scene: BenchSceneArg::WheelLong, particles, model, .. }
+            if particles.is_some() || model.is_some() =>
+        {
+            Err(InputError::flag(
+                if particles.is_some() { "--particles" } else { "--model" },
+                "applies to --scene block only".to_string(),
+            )
+            .into())
+        }
         Command::Bench {
             scene: BenchSceneArg::WheelLong,
             active,
@@ -715,16 +726,41 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             warmup,
             json.as_deref(),
         ),
-        Command::Bench { scene: BenchSceneArg::Block, active, length, .. } if active.is_some() || length.is_some() => {
+        Command::Bench { active, length, .. } if active.is_some() || length.is_some() => Err(InputError::flag(
+            if active.is_some() { "--active" } else { "--length" },
+            "applies to --scene wheel-long only".to_string(),
+        )
+        .into()),
+        Command::Bench { scene: BenchSceneArg::Column, particles, model, .. }
+            if particles.is_some() || model.is_some() =>
+        {
             Err(InputError::flag(
-                if active.is_some() { "--active" } else { "--length" },
-                "applies to --scene wheel-long only".to_string(),
+                if particles.is_some() { "--particles" } else { "--model" },
+                "applies to --scene block only (the column is fixed: 67 626 particles, Drucker-Prager)".to_string(),
             )
             .into())
         }
-        Command::Bench { particles, model, backend, precision, steps, warmup, json, skin, carve: false, .. } => {
-            bench::run(particles, model, backend, precision, &skin, steps, warmup, json.as_deref())
-        }
+        Command::Bench {
+            scene: bench_kind,
+            particles,
+            model,
+            backend,
+            precision,
+            steps,
+            warmup,
+            json,
+            skin,
+            carve: false,
+            ..
+        } => bench::run(
+            bench::Kind { column: bench_kind == BenchSceneArg::Column, particles, model },
+            backend,
+            precision,
+            &skin,
+            steps,
+            warmup,
+            json.as_deref(),
+        ),
         Command::Run { scene, out, backend, precision, sets, slips, quiet } => {
             let mut sets = sets;
             if let Some(s) = slips {
