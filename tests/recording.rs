@@ -24,17 +24,23 @@ const BOX: &str = "[[bodies]]\nname = \"box\"\nshape = { type = \"box\", size = 
 
 /// Decoded point-cloud points: (x, y, z, p, q, pc, speed, material).
 fn points(msg: &serde_json::Value) -> Vec<([f32; 7], u32)> {
+    points_with_phase(msg).into_iter().map(|(v, m, _)| (v, m)).collect()
+}
+
+/// Decoded point-cloud points: (x, y, z, p, q, pc, speed), material, phase.
+fn points_with_phase(msg: &serde_json::Value) -> Vec<([f32; 7], u32, u32)> {
     let stride = msg["point_stride"].as_u64().expect("stride") as usize;
-    assert_eq!(stride, 32);
+    assert_eq!(stride, 36);
     let names: Vec<&str> =
         msg["fields"].as_array().expect("fields").iter().map(|f| f["name"].as_str().expect("name")).collect();
-    assert_eq!(names, ["x", "y", "z", "p", "q", "pc", "speed", "material"]);
+    assert_eq!(names, ["x", "y", "z", "p", "q", "pc", "speed", "material", "phase"]);
     let data = base64::engine::general_purpose::STANDARD.decode(msg["data"].as_str().expect("data")).expect("base64");
     assert_eq!(data.len() % stride, 0);
     data.chunks(stride)
         .map(|c| {
             let f = |k: usize| f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().expect("4 bytes"));
-            ([f(0), f(1), f(2), f(3), f(4), f(5), f(6)], u32::from_le_bytes(c[28..32].try_into().expect("4 bytes")))
+            let u = |k: usize| u32::from_le_bytes(c[4 * k..4 * k + 4].try_into().expect("4 bytes"));
+            ([f(0), f(1), f(2), f(3), f(4), f(5), f(6)], u(7), u(8))
         })
         .collect()
 }
@@ -101,6 +107,30 @@ fn the_region_of_interest_keeps_only_the_points_inside_it() {
     assert!(first.iter().all(|(v, _)| v[0] <= 0.06));
     let frac = first.len() as f64 / summary.particles as f64;
     assert!((frac - 0.5).abs() < 0.05, "ROI holds {frac} of the particles");
+}
+
+/// A wet scene's point cloud tells the phases apart: `phase` is 1 exactly on the water's
+/// particles (material 1 here) and 0 on the soil's, and both are recorded.
+#[test]
+fn a_wet_recording_carries_the_phase_of_each_point() {
+    let text = "[simulation]\nend_time = 0.004\nprecision = \"f64\"\nexchange_interval = 0.001\n\n[sph]\nspacing = 0.01\n\n\
+         [[materials]]\nname = \"sand\"\nmodel = \"drucker-prager\"\ndensity = 1600\ngrain_density = 2650\n\
+         permeability = 1e-3\nyoungs_modulus = 1e7\npoisson_ratio = 0.3\nfriction_angle = 30.0\n\n\
+         [[materials]]\nname = \"water\"\nmodel = \"water\"\ndensity = 1000\nsound_speed = 100\nviscosity = 1e-3\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.06, 0.06, 0.1]\n\n[terrain]\nmaterial = \"sand\"\ndepth = 0.04\n\n\
+         [[water_blocks]]\nmaterial = \"water\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.06, 0.06, 0.06]\n\n\
+         [output]\nevery = 0.002\n";
+    let scene = common::scene(text);
+    let out = common::out_dir("recording_wet");
+    run_scene(&scene, &RunOptions::quiet(out.clone())).expect("runs");
+    let topics = common::read_validated(&out.join("recording.mcap"));
+    let (_, msg) = topics["/terrain/particles"].last().expect("a frame");
+    let pts = points_with_phase(msg);
+    let water = pts.iter().filter(|(_, _, phase)| *phase == 1).count();
+    assert!(water > 0 && water < pts.len(), "{water} water points of {}", pts.len());
+    for (_, material, phase) in &pts {
+        assert_eq!(*phase, u32::from(*material == 1), "material {material} recorded as phase {phase}");
+    }
 }
 
 #[test]

@@ -560,6 +560,11 @@ fn a_wet_scene_is_valid() {
         + "\n[[water_blocks]]\nmaterial = \"water\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.4, 0.4, 0.2]\n";
     let s = load_scene(&write("wet", &text), &[]).expect("valid");
     assert_eq!(s.soil.len(), 2);
+    assert!(regolith::scene::describe(&s).contains("water: pore pressure and drag coupling on, drag svf"));
+    let text = text.replacen("spacing = 0.02", "spacing = 0.02\ndrag = \"particle\"", 1);
+    let s = load_scene(&write("wet_particle", &text), &[]).expect("valid");
+    assert_eq!(s.solver.drag, regolith::fsi::config::Drag::Particle);
+    assert!(regolith::scene::describe(&s).contains("drag particle"));
 }
 
 /// A wet scene with `from` replaced by `to`: its error.
@@ -621,4 +626,23 @@ fn wet_scene_mistakes_are_one_line_errors() {
         e,
         format!("{}:31: key `bodies[0].permeable`: needs water in the scene ([[water_blocks]])", p.display())
     );
+    let (p, e) = err(
+        "dry_drag",
+        &BASE.replacen(
+            "spacing = 0.02",
+            "spacing = 0.02
+drag = \"particle\"",
+            1,
+        ),
+    );
+    assert_eq!(
+        e,
+        format!(
+            "{}:7: key `sph.drag`: applies to scenes with water ([[water_blocks]]); remove it from a dry scene",
+            p.display()
+        )
+    );
+    let (p, e) = wet_err("wet_drag_name", "spacing = 0.02", "spacing = 0.02\ndrag = \"bang\"");
+    assert!(e.starts_with(&format!("{}:7", p.display())) && e.contains("drag") && e.contains("svf"), "{e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
 }

@@ -104,6 +104,21 @@ impl Shifting {
     }
 }
 
+/// How the soil–water drag of a wet scene is spread between the particles of the two phases
+/// (`[sph] drag`; see `cpu::wet`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Drag {
+    /// Smooth volume fractions: each soil–water pair carries `C V_w V_s W / L` (L the kernel's
+    /// lattice sum), so the drag a water particle feels fades with the soil volume in its
+    /// support, across the faces of a soil layer over about h.
+    #[default]
+    Svf,
+    /// Per particle ("bang-bang"): a water particle with any soil (or solid wall) in its
+    /// support carries its whole drag `C V_w (v_w − v̄_s)`, spread over that soil by Shepard
+    /// weights `V_s W / Σ V_s W`; the soil's volume fraction is an indicator, not smoothed.
+    Particle,
+}
+
 /// How soil slides along a wall or a body's markers.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub enum WallContact {
@@ -165,6 +180,8 @@ pub struct SolverConfig {
     /// that a pair inside 2h could be missing (0: rebuild every step). Backends that do not
     /// reuse lists rebuild every step, which gives the same pairs.
     pub neighbor_skin: f64,
+    /// Soil–water drag distribution (wet scenes only).
+    pub drag: Drag,
 }
 
 impl SolverConfig {
@@ -191,6 +208,7 @@ impl Default for SolverConfig {
             gravity: [0.0, 0.0, -9.81],
             bce_layers: 3,
             neighbor_skin: DEFAULT_NEIGHBOR_SKIN,
+            drag: Drag::Svf,
         }
     }
 }

@@ -263,6 +263,9 @@ fn particles_of<'py, T: Real + numpy::Element>(py: Python<'py>, s: &RSim<T>) -> 
     d.set_item("specific_volume", PyArray1::from_vec(py, f.states()[..n].iter().map(|s| s.v).collect()))?;
     d.set_item("density", PyArray1::from_vec(py, f.densities()[..n].to_vec()))?;
     d.set_item("material", PyArray1::from_vec(py, f.material_ids()[..n].iter().map(|m| u32::from(*m)).collect()))?;
+    let mats = f.materials();
+    let phase: Vec<u32> = f.material_ids()[..n].iter().map(|m| u32::from(mats[*m as usize].is_water())).collect();
+    d.set_item("phase", PyArray1::from_vec(py, phase))?;
     d.set_item("id", PyArray1::from_vec(py, f.ids()[..n].to_vec()))?;
     Ok(d)
 }
@@ -367,8 +370,8 @@ impl Simulation {
 
     /// The soil particles in the domain as numpy arrays in the run's precision: `x`, `v`
     /// (n × 3, m and m/s), `p`, `q` (Pa), `stress` (n × 6: xx, yy, zz, xy, xz, yz, Pa, tension
-    /// positive), `p_c` (Pa), `specific_volume`, `density` (kg/m³), `material` and `id`
-    /// (uint32). One copy of the solver's arrays, handed to numpy without a second. Not a
+    /// positive), `p_c` (Pa), `specific_volume`, `density` (kg/m³), `material`, `phase` (0
+    /// soil, 1 water) and `id` (uint32). One copy of the solver's arrays, handed to numpy without a second. Not a
     /// zero-copy view on purpose: the solver reorders its particle arrays when it sorts them
     /// into cells and rewrites them while stepping with the GIL released, so a view would
     /// change, or tear, under the reader; `id` follows a particle from one call to the next.

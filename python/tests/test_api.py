@@ -47,8 +47,9 @@ def test_particles_have_the_right_shapes_and_dtypes(scenes):
     n = sim.n_particles
     assert n > 1000
     assert p["x"].shape == (n, 3) and p["v"].shape == (n, 3) and p["stress"].shape == (n, 6)
-    for k in ("p", "q", "p_c", "density", "specific_volume", "material", "id"):
+    for k in ("p", "q", "p_c", "density", "specific_volume", "material", "phase", "id"):
         assert p[k].shape == (n,), k
+    assert p["phase"].dtype == np.uint32 and not p["phase"].any(), "a dry scene holds soil only (phase 0)"
     assert p["x"].dtype == np.float32 and sim.precision == "f32"
     assert p["material"].dtype == np.uint32 and p["id"].dtype == np.uint32
     assert len(np.unique(p["id"])) == n

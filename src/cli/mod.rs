@@ -155,6 +155,29 @@ pub enum StudyCommand {
         #[command(flatten)]
         runner: BatchRunArgs,
     },
+    /// Steady seepage through a sand layer on a filter stone over a ladder of spacings, for
+    /// each soil–water drag distribution: the Darcy flux against k Δh / L and against the
+    /// measured gradient, with the observed order; writes darcy.md and darcy.json.
+    Darcy {
+        /// Spacings d0 (m), coarse to fine, comma-separated.
+        #[arg(long, value_name = "M,...", value_delimiter = ',', default_value = "0.02,0.01")]
+        spacings: Vec<f64>,
+        /// Drag distributions, comma-separated.
+        #[arg(long, value_enum, value_name = "DRAG,...", value_delimiter = ',', default_value = "svf,particle")]
+        drag: Vec<DragArg>,
+        /// Output folder.
+        #[arg(long, value_name = "DIR", default_value = "out/darcy")]
+        out: PathBuf,
+    },
+}
+
+/// Soil–water drag distribution (`[sph] drag`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum DragArg {
+    /// Smooth volume fractions.
+    Svf,
+    /// Per particle (bang-bang).
+    Particle,
 }
 
 /// The accuracy study's options from its flags.
@@ -841,6 +864,24 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             }
             batch::threads_only(&a.runner)?;
             calibrate::triaxial(a.inputs()?)
+        }
+        Command::Study { study: StudyCommand::Darcy { spacings, drag, out } } => {
+            let drags = drag
+                .into_iter()
+                .map(|d| match d {
+                    DragArg::Svf => regolith_fsi::config::Drag::Svf,
+                    DragArg::Particle => regolith_fsi::config::Drag::Particle,
+                })
+                .collect();
+            let points = crate::study::darcy::darcy_study(&crate::study::darcy::DarcyOptions {
+                spacings,
+                drags,
+                out: out.clone(),
+            })
+            .map_err(study::study_failure)?;
+            println!("{}", crate::study::darcy::table(&points));
+            println!("table in {}", out.join("darcy.md").display());
+            Ok(())
         }
         Command::Study { study: StudyCommand::Stability(a) } => {
             if a.runner.runner == RunnerArg::Ray {

@@ -23,13 +23,16 @@ pub struct ParticleRow {
     pub pc: f64,
     /// Material id.
     pub material: u16,
+    /// The particle is water (a wet scene's pore or free water), not soil.
+    pub water: bool,
 }
 
 /// The output values of active particle `i`.
 pub fn particle_row<T: Real>(s: &dyn SphSolver<T>, i: usize) -> ParticleRow {
     let sig = s.stresses()[i];
     let material = s.material_ids()[i];
-    let pc = match s.materials()[material as usize].rheology {
+    let mat = &s.materials()[material as usize];
+    let pc = match mat.rheology {
         Rheology::Mcc(_) => s.states()[i].pc.as_f64(),
         _ => 0.0,
     };
@@ -40,6 +43,7 @@ pub fn particle_row<T: Real>(s: &dyn SphSolver<T>, i: usize) -> ParticleRow {
         q: sig.von_mises().as_f64(),
         pc,
         material,
+        water: mat.is_water(),
     }
 }
 

@@ -101,6 +101,7 @@ pub(crate) struct SphFile {
     pub free_surface_stress: Option<FreeSurfaceStressName>,
     pub bce_layers: Option<i64>,
     pub neighbor_skin: Option<f64>,
+    pub drag: Option<DragName>,
     pub active: Option<ActiveFile>,
 }
 
@@ -120,6 +121,13 @@ pub(crate) struct ActiveFile {
 pub(crate) enum FreeSurfaceStressName {
     Keep,
     Zero,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum DragName {
+    Svf,
+    Particle,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]

@@ -17,6 +17,7 @@
 //! kernel = "wendland"       # or "cubic"
 //! artificial_viscosity = 0.1
 //! shifting = "xsph"         # "none" | "xsph" | "ppst" | "ppst+xsph"
+//! # drag = "svf"            # wet scenes only: "svf" (smooth volume fractions) | "particle"
 //!
 //! [[materials]]
 //! name = "sand"
@@ -61,7 +62,9 @@ pub use vehicle::{Profile, VehicleSpec, WheelSpec};
 
 use std::path::{Path, PathBuf};
 
-use regolith_fsi::config::{FreeSurfaceStress, Integrator, KernelKind, Shifting, SolverConfig, TimeStep, WallContact};
+use regolith_fsi::config::{
+    Drag, FreeSurfaceStress, Integrator, KernelKind, Shifting, SolverConfig, TimeStep, WallContact,
+};
 use regolith_fsi::rheology::MaterialParams;
 use regolith_terrain::{Aabb, Heightmap, SoilRegion, Surface};
 
@@ -71,8 +74,8 @@ pub use plan::describe;
 use crate::input::{InputError, parse_toml, read_text};
 use crate::material::{build_material, load_material_file};
 use file::{
-    AxisName, BackendName, BlockShapeName, BodyFile, FreeSurfaceStressName, IntegratorName, KernelName, MotionFile,
-    OutputFile, PrecisionName, RigFile, RigKind, ScaleFile, SceneFile, ShapeFile, ShiftingName,
+    AxisName, BackendName, BlockShapeName, BodyFile, DragName, FreeSurfaceStressName, IntegratorName, KernelName,
+    MotionFile, OutputFile, PrecisionName, RigFile, RigKind, ScaleFile, SceneFile, ShapeFile, ShiftingName,
 };
 use regolith_rigid::{Axis, BodyDesc, Grousers, MassSpec, Motion, Pose, ShapeDesc};
 
@@ -164,6 +167,12 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         return Err(e(
             "simulation.backend",
             "\"wgpu\" has no water phase yet: a scene with [[water_blocks]] runs on \"cpu\"".into(),
+        ));
+    }
+    if !wet && file.sph.as_ref().is_some_and(|s| s.drag.is_some()) {
+        return Err(e(
+            "sph.drag",
+            "applies to scenes with water ([[water_blocks]]); remove it from a dry scene".into(),
         ));
     }
     if wet && active.is_some() {

@@ -318,6 +318,16 @@ pub fn describe(scene: &Scene) -> String {
         if sv.artificial_viscosity > 0.0 { "on" } else { "off" },
         scene.bodies.iter().filter(|b| b.fsi).count()
     );
+    if models.contains(&"water") {
+        let _ = writeln!(
+            s,
+            "  water: pore pressure and drag coupling on, drag {}",
+            match sv.drag {
+                regolith_fsi::config::Drag::Svf => "svf (smooth volume fractions)",
+                regolith_fsi::config::Drag::Particle => "particle (per-particle, bang-bang)",
+            }
+        );
+    }
     let _ = markers;
     s
 }

@@ -194,6 +194,10 @@ pub(super) fn resolve_settings(
         gravity,
         bce_layers: bce_layers as usize,
         neighbor_skin,
+        drag: match sph.drag {
+            None | Some(DragName::Svf) => Drag::Svf,
+            Some(DragName::Particle) => Drag::Particle,
+        },
     };
     let exchange_interval = sim.exchange_interval.unwrap_or(1e-3);
     if !(exchange_interval.is_finite() && exchange_interval > 0.0 && exchange_interval <= end_time) {

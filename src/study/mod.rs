@@ -3,6 +3,7 @@
 //! `convergence` estimates a result's observed order and limit over a resolution ladder.
 
 pub mod convergence;
+pub mod darcy;
 pub mod expect;
 mod probe;
 pub mod stability;

@@ -241,7 +241,7 @@ impl<T: Real> CpuSph<T> {
             )));
         }
         let h = cfg.h();
-        let wet = wet::WetSetup::of(&materials, lattice_sum(&cfg)).map_err(SolverError::Setup)?;
+        let wet = wet::WetSetup::of(&materials, lattice_sum(&cfg), cfg.drag).map_err(SolverError::Setup)?;
         let grid = GridSpec::covering(domain.0, domain.1, h);
         let n = particles.len();
         let n_wet = if wet.is_some() { n } else { 0 };
@@ -1022,7 +1022,7 @@ impl<T: Real> CpuSph<T> {
             &self.nl_sm,
             &self.phase[..m],
             &self.m_pore,
-            &self.m_permeable,
+            (&self.m_permeable, self.m_volume),
             |k| ms_pos[touched[k] as usize],
             &mut self.packed[..m],
             &mut self.pore[..m],
@@ -1121,7 +1121,7 @@ impl<T: Real> CpuSph<T> {
         if with_forces {
             wet::wet_marker_forces::<T, K>(
                 &c,
-                (visc, (setup.inv_lattice_sum, setup.lattice_sum)),
+                (visc, setup.lattice_sum),
                 &self.packed[..n],
                 (&self.m_packed, &self.m_packed_w),
                 (&self.m_pore, &self.m_permeable),

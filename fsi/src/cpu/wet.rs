@@ -42,6 +42,7 @@
 use rayon::prelude::*;
 
 use crate::Real;
+use crate::config::Drag;
 use crate::kernel::Kernel;
 use crate::math::{Sym3, Vec3};
 use crate::rheology::{MIN_POROSITY, Material, Moduli, Rheology, STANDARD_GRAVITY, Water, jaumann_rate};
@@ -69,13 +70,15 @@ pub(crate) struct WetSetup<T> {
     /// term and the two cancel to `n ∇p` (scaled, they would leave `(M − (1 − n)) ∇p`, an
     /// error of the moment amplified by 1 / n).
     pub lattice_sum: T,
+    /// How the drag is spread over the pairs.
+    pub drag: Drag,
 }
 
 impl<T: Real> WetSetup<T> {
     /// The water of `materials`: `None` for a dry scene; an error when there are two water
     /// materials or a soil without `permeability` shares the scene with water. `lattice_sum`
     /// is the kernel's sum over the particles' starting lattice.
-    pub fn of(materials: &[Material<T>], lattice_sum: f64) -> Result<Option<Self>, String> {
+    pub fn of(materials: &[Material<T>], lattice_sum: f64, drag: Drag) -> Result<Option<Self>, String> {
         let mut found = None;
         for m in materials {
             if let Rheology::Water(w) = m.rheology {
@@ -88,6 +91,7 @@ impl<T: Real> WetSetup<T> {
                     gamma: m.density * T::of(STANDARD_GRAVITY),
                     inv_lattice_sum: T::of(1.0 / lattice_sum),
                     lattice_sum: T::of(lattice_sum),
+                    drag,
                 });
             }
         }
@@ -122,6 +126,10 @@ pub(crate) struct Pore<T> {
     pub p: T,
     /// Water: `n² γ_w` (N/m³); soil: 0.
     pub cw: T,
+    /// Water: what each of its drag pairs' `V_s W` is divided by, inverted: `1 / L` for
+    /// [`Drag::Svf`] (L the lattice sum), `1 / Σ V_s W` over the soil and solid markers in its
+    /// support for [`Drag::Particle`] (0 with none); soil: 0.
+    pub inv_sum: T,
     /// Soil: the fraction of its pores water fills (kernel sum of water volume over that of
     /// soil volume, at most 1); water: 0.
     pub sat: T,
@@ -247,7 +255,7 @@ pub(crate) fn porosity<T: Real, K: Kernel<T>>(
     nl_sm: &NeighborList,
     phase: &[Phase<T>],
     marker_solid: &[MarkerPore<T>],
-    permeable: &[bool],
+    (permeable, marker_volume): (&[bool], T),
     markers_x: impl Fn(usize) -> Vec3<T> + Sync,
     packed: &mut [Packed<T>],
     pore: &mut [Pore<T>],
@@ -280,13 +288,24 @@ pub(crate) fn porosity<T: Real, K: Kernel<T>>(
                     }
                     let r2 = (pa.x - markers_x(m as usize)).norm2();
                     if r2 < c.support2 {
-                        solid += marker_solid[m as usize].vg * K::w(r2.sqrt(), c.inv_h, c.alpha);
+                        let w = K::w(r2.sqrt(), c.inv_h, c.alpha);
+                        let ms = &marker_solid[m as usize];
+                        solid += ms.vg * w;
+                        // Markers drag the water where they hold soil (see `wet_rates`).
+                        if ms.inv_k > T::zero() {
+                            vs += marker_volume * w;
+                        }
                     }
                 }
                 let n = (T::one() - solid).max(T::of(MIN_POROSITY));
                 let p = setup.water.pressure(pa.rho / n, setup.rest);
                 let s = Sym3::iso(-p / (pa.rho * pa.rho));
-                (Pore { n, p, cw: n * n * setup.gamma, sat: T::zero() }, Some(s))
+                let inv_sum = match setup.drag {
+                    Drag::Svf => setup.inv_lattice_sum,
+                    Drag::Particle if vs > T::min_positive_value().sqrt() => T::one() / vs,
+                    Drag::Particle => T::zero(),
+                };
+                (Pore { n, p, cw: n * n * setup.gamma, inv_sum, sat: T::zero() }, Some(s))
             } else {
                 // The particle's own volume is in the soil sum (W(0)), so it is never empty.
                 vs += pa.vol * K::w(T::zero(), c.inv_h, c.alpha);
@@ -347,17 +366,19 @@ pub(crate) fn marker_pressures<T: Real, K: Kernel<T>>(
 
 /// The phase-coupling force on particle `a` from particle `b` of the other phase (N): pore
 /// pressure and drag, one expression from either side (water operands first), so the two
-/// evaluations of a pair are exact negatives. The drag's kernel weight is scaled by
-/// `inv_sum` ([`WetSetup::inv_lattice_sum`]). Also returns the drag coefficient `C V_a V_b W`
-/// (kg/s) for the time-step bound.
+/// evaluations of a pair are exact negatives. The operands are the pressure difference, the
+/// water's `n² γ_w`, the soil's grain volume and `1 / k`, and the water's drag normaliser
+/// [`Pore::inv_sum`] that scales the drag's kernel weight; `sum` is
+/// [`WetSetup::lattice_sum`]. Also returns the drag coefficient `C V_a V_b W` (kg/s) for the
+/// time-step bound.
 #[inline(always)]
 fn coupling<T: Real, K: Kernel<T>>(
     c: &PairConsts<T>,
     pa: &Packed<T>,
     pb: &Packed<T>,
     a_water: bool,
-    (dp, cw, vg, inv_k): (T, T, T, T),
-    (inv_sum, sum): (T, T),
+    (dp, cw, vg, inv_k, inv_sum): (T, T, T, T, T),
+    sum: T,
 ) -> (Vec3<T>, T) {
     let r = pa.x - pb.x;
     let r2 = r.norm2();
@@ -412,11 +433,11 @@ pub(crate) fn wet_rates<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: boo
                 }
             } else {
                 let k = if pha.water {
-                    (poa.p - pore[b].p, poa.cw, phase[b].vg, phase[b].inv_k)
+                    (poa.p - pore[b].p, poa.cw, phase[b].vg, phase[b].inv_k, poa.inv_sum)
                 } else {
-                    (pore[b].p - poa.p, pore[b].cw, pha.vg, pha.inv_k)
+                    (pore[b].p - poa.p, pore[b].cw, pha.vg, pha.inv_k, pore[b].inv_sum)
                 };
-                let (fi, d) = coupling::<T, K>(c, pa, pb, pha.water, k, (setup.inv_lattice_sum, setup.lattice_sum));
+                let (fi, d) = coupling::<T, K>(c, pa, pb, pha.water, k, setup.lattice_sum);
                 f += fi;
                 drag += d;
             }
@@ -433,11 +454,11 @@ pub(crate) fn wet_rates<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: boo
             // extrapolated pore pressure for the soil.
             let wall = Packed { v: mp.vel, ..records[w] };
             let k = if pha.water {
-                (poa.p - mp.p, poa.cw, mp.vg, mp.inv_k)
+                (poa.p - mp.p, poa.cw, mp.vg, mp.inv_k, poa.inv_sum)
             } else {
-                (mp.p - poa.p, T::zero(), pha.vg, T::zero())
+                (mp.p - poa.p, T::zero(), pha.vg, T::zero(), T::zero())
             };
-            let (fi, d) = coupling::<T, K>(c, pa, &wall, pha.water, k, (setup.inv_lattice_sum, setup.lattice_sum));
+            let (fi, d) = coupling::<T, K>(c, pa, &wall, pha.water, k, setup.lattice_sum);
             f += fi;
             drag += d;
         }
@@ -511,7 +532,7 @@ fn laminar<T: Real, K: Kernel<T>>(c: &PairConsts<T>, mu: T, pa: &Packed<T>, pb: 
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn wet_marker_forces<T: Real, K: Kernel<T>>(
     c: &PairConsts<T>,
-    (visc, sums): (bool, (T, T)),
+    (visc, sum): (bool, T),
     soil: &[Packed<T>],
     (m_soil, m_water): (&[Packed<T>], &[Packed<T>]),
     (m_pore, permeable): (&[MarkerPore<T>], &[bool]),
@@ -537,11 +558,11 @@ pub(crate) fn wet_marker_forces<T: Real, K: Kernel<T>>(
             };
             let wall = Packed { v: mp.vel, ..*pw };
             let kk = if pha.water {
-                (poa.p - mp.p, poa.cw, mp.vg, mp.inv_k)
+                (poa.p - mp.p, poa.cw, mp.vg, mp.inv_k, poa.inv_sum)
             } else {
-                (mp.p - poa.p, T::zero(), pha.vg, T::zero())
+                (mp.p - poa.p, T::zero(), pha.vg, T::zero(), T::zero())
             };
-            f -= coupling::<T, K>(c, pa, &wall, pha.water, kk, sums).0;
+            f -= coupling::<T, K>(c, pa, &wall, pha.water, kk, sum).0;
         }
         *out = f;
     });

@@ -16,7 +16,7 @@ pub const FLOAT32: u32 = 7;
 pub const UINT32: u32 = 5;
 
 /// The point-cloud fields: name and numeric type, packed in this order, 4 bytes each.
-pub const POINT_FIELDS: [(&str, u32); 8] = [
+pub const POINT_FIELDS: [(&str, u32); 9] = [
     ("x", FLOAT32),
     ("y", FLOAT32),
     ("z", FLOAT32),
@@ -25,6 +25,7 @@ pub const POINT_FIELDS: [(&str, u32); 8] = [
     ("pc", FLOAT32),
     ("speed", FLOAT32),
     ("material", UINT32),
+    ("phase", UINT32),
 ];
 
 /// Bytes per point.

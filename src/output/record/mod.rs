@@ -4,7 +4,7 @@
 //!
 //! | topic | schema | when |
 //! |---|---|---|
-//! | `/terrain/particles` | `foxglove.PointCloud` (x, y, z, p, q, pc, speed as float32, material as uint32) | every frame, unless `output.particles = false` |
+//! | `/terrain/particles` | `foxglove.PointCloud` (x, y, z, p, q, pc, speed as float32; material, and phase 0 soil / 1 water, as uint32) | every frame, unless `output.particles = false` |
 //! | `/tf` | `foxglove.FrameTransforms`, each body under `world` | every frame, when the scene has bodies |
 //! | `/bodies/shapes` | `foxglove.SceneUpdate`, each body's geometry locked to its frame | at the start of each run (a rig run may change a shape) |
 //! | `/bodies/wrench` | `regolith.BodyWrenches` | every frame, when the scene has bodies |
@@ -224,6 +224,7 @@ impl Recorder {
                 data.extend_from_slice(&(v as f32).to_le_bytes());
             }
             data.extend_from_slice(&u32::from(r.material).to_le_bytes());
+            data.extend_from_slice(&u32::from(r.water).to_le_bytes());
         }
         data
     }
