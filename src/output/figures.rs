@@ -1,8 +1,6 @@
 //! Plots of a terrain run: the deposit's surface profile and each vehicle's path, speed,
 //! wheel slip and sinkage.
 
-use regolith_fsi::{Real, SphSolver};
-
 use super::plot::{Figure, Panel, Series as Line};
 use super::series::Series;
 use crate::scene::{Scene, VehicleSpec};
@@ -65,14 +63,10 @@ pub fn vehicle_figure(s: &Series, v: &VehicleSpec) -> Figure {
     }
 }
 
-/// The deposit's surface profile, initial and final: the highest particle top in bins of the
-/// radial distance from `axis` (a column collapse's) or of x (other terrain).
-pub fn deposit_profile<T: Real>(
-    scene: &Scene,
-    initial: &[[f64; 3]],
-    s: &dyn SphSolver<T>,
-    axis: Option<[f64; 2]>,
-) -> Figure {
+/// The deposit's surface profile, initial and final, from the soil's positions (water left
+/// out): the highest particle top in bins of the radial distance from `axis` (a column
+/// collapse's) or of x (other terrain).
+pub fn deposit_profile(scene: &Scene, initial: &[[f64; 3]], last: &[[f64; 3]], axis: Option<[f64; 2]>) -> Figure {
     let d0 = scene.solver.spacing;
     let coord = |p: [f64; 3]| match axis {
         Some(a) => ((p[0] - a[0]).powi(2) + (p[1] - a[1]).powi(2)).sqrt(),
@@ -88,7 +82,7 @@ pub fn deposit_profile<T: Real>(
         }
         bins.into_iter().map(|(k, z)| ((k as f64 + 0.5) * d0, z)).collect::<Vec<_>>()
     };
-    let fin = profile(&mut (0..s.active()).map(|i| s.positions()[i].as_f64()));
+    let fin = profile(&mut last.iter().copied());
     let ini = profile(&mut initial.iter().copied());
     let x_label = if axis.is_some() { "distance from the column axis r (m)" } else { "x (m)" };
     let floor = initial.iter().map(|p| p[2] - 0.5 * d0).fold(f64::INFINITY, f64::min);

@@ -130,7 +130,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
         }
     } else {
         let mut sim = Simulation::<T>::new(scene)?;
-        let initial: Vec<[f64; 3]> = sim.system.fluid.positions().iter().map(|p| p.as_f64()).collect();
+        let initial = summary::soil_points(sim.system.fluid.as_ref());
         driver.observe(&mut terrain_series);
         driver.begin(&sim, None)?;
         while !driver.done(&sim) {
@@ -153,6 +153,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
     }
     let wall = stats.elapsed();
     let fluid = sim.as_ref().map(|s| s.system.fluid.as_ref());
+    let last_soil = fluid.map(|f| summary::soil_points(f));
     let mut summary = Summary {
         schema_version: SUMMARY_SCHEMA_VERSION,
         scene: scene.path.display().to_string(),
@@ -198,8 +199,8 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
                 })
         ),
         error: failure.as_ref().map(|e| e.to_string()),
-        runout: match (fluid, &initial) {
-            (Some(f), Some(i)) => summary::column_runout(scene, i, f),
+        runout: match (&last_soil, &initial) {
+            (Some(l), Some(i)) => summary::column_runout(scene, i, l),
             _ => None,
         },
         geostatic: match (fluid, &initial) {
@@ -227,9 +228,9 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
             figures.push((format!("vehicle_{}", v.name), figures::vehicle_figure(ser, v)));
         }
     }
-    if let (Some(s), Some(i)) = (&sim, &initial) {
+    if let (Some(l), Some(i)) = (&last_soil, &initial) {
         let axis = summary.runout.as_ref().map(|r| r.axis);
-        figures.push(("deposit_profile".into(), figures::deposit_profile(scene, i, s.system.fluid.as_ref(), axis)));
+        figures.push(("deposit_profile".into(), figures::deposit_profile(scene, i, l, axis)));
     }
     if !DRAWS_PLOTS && !figures.is_empty() {
         summary.notes.push("no plots drawn: this build of regolith has no `plots` feature".into());

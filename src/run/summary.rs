@@ -171,25 +171,32 @@ fn deposit_radius(points: impl Iterator<Item = [f64; 3]>, axis: [f64; 2], d0: f6
     r[k] + 0.5 * d0
 }
 
-pub(super) fn column_runout<T: Real>(scene: &Scene, initial: &[[f64; 3]], s: &dyn SphSolver<T>) -> Option<Runout> {
-    if scene.soil.len() != 1 {
-        return None;
-    }
-    let SoilRegion::Cylinder { base_center, height, radius } = scene.soil[0].region else { return None };
+/// The positions of the soil particles still in the domain (water left out): what a runout
+/// or a deposit profile measures.
+pub(super) fn soil_points<T: Real>(s: &dyn SphSolver<T>) -> Vec<[f64; 3]> {
+    let (mats, ids) = (s.materials(), s.material_ids());
+    (0..s.active()).filter(|&i| !mats[ids[i] as usize].is_water()).map(|i| s.positions()[i].as_f64()).collect()
+}
+
+/// The runout of a scene whose soil is one cylinder (water blocks aside: a saturated column
+/// is measured on its soil), from the soil's positions at the start and at the end.
+pub(super) fn column_runout(scene: &Scene, initial: &[[f64; 3]], last: &[[f64; 3]]) -> Option<Runout> {
+    let mut soil = scene.soil.iter().filter(|s| !scene.materials[s.material].is_water());
+    let (Some(only), None) = (soil.next(), soil.next()) else { return None };
+    let SoilRegion::Cylinder { base_center, height, radius } = only.region else { return None };
     let axis = [base_center[0], base_center[1]];
     let d0 = scene.solver.spacing;
     // The lattice disc has the area of the nominal circle; the percentile estimator reads its
     // edge a little outside. Measuring both states with it and adding the difference to the
     // nominal radius cancels that bias.
     let r0_est = deposit_radius(initial.iter().copied(), axis, d0);
-    let rf_est = deposit_radius(s.positions()[..s.active()].iter().map(|p| p.as_f64()), axis, d0);
+    let rf_est = deposit_radius(last.iter().copied(), axis, d0);
     let r0 = radius;
     let rf = r0 + (rf_est - r0_est);
     let a = height / r0;
     let lube = if a <= 1.7 { 1.24 * a } else { 1.6 * a.sqrt() };
-    let near_axis = s.positions()[..s.active()]
+    let near_axis = last
         .iter()
-        .map(|p| p.as_f64())
         .filter(|p| ((p[0] - axis[0]).powi(2) + (p[1] - axis[1]).powi(2)).sqrt() < 1.5 * d0)
         .map(|p| p[2] - base_center[2] + 0.5 * d0)
         .fold(0.0, f64::max);

@@ -137,7 +137,7 @@ pub(super) fn resolve_soil(
             initial_pressure: None,
         });
     }
-    let is_water = |m: usize| materials[m].params.model == Some(regolith_fsi::rheology::ModelKind::Water);
+    let is_water = |m: usize| materials[m].is_water();
     if let Some(t) = soil.first()
         && is_water(t.material)
     {
@@ -252,7 +252,7 @@ pub(super) fn resolve_soil(
         return Err(InputError::file(path, "the scene has no soil: add [terrain] or [[soil_blocks]]"));
     }
     if soil.iter().any(|s| is_water(s.material)) {
-        if materials.iter().filter(|m| m.params.model == Some(regolith_fsi::rheology::ModelKind::Water)).count() > 1 {
+        if materials.iter().filter(|m| m.is_water()).count() > 1 {
             return Err(e("water_blocks", "take one water material: a scene holds at most one".into()));
         }
         if let Some(i) = (0..materials.len()).find(|&i| !is_water(i) && materials[i].params.permeability.is_none()) {

@@ -52,6 +52,13 @@ pub struct SceneMaterial {
     pub params: MaterialParams,
 }
 
+impl SceneMaterial {
+    /// Whether this is the scene's pore water (`model = "water"`) rather than a soil.
+    pub fn is_water(&self) -> bool {
+        self.params.model == Some(regolith_fsi::rheology::ModelKind::Water)
+    }
+}
+
 /// Soil of one material in one region.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SoilSpec {
