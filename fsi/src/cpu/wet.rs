@@ -30,8 +30,9 @@
 //!   `F_w = −(n_w² γ_w / k_s) V_w V_s W (v_w − v_s − ½ (L_w + L_s)(x_w − x_s))` sums to the
 //!   drag above (the smooth volume fraction, "SVF", distribution); the slip is taken at the
 //!   pair's midpoint with the two phases' velocity gradients L, so that soil and water moving
-//!   together in a non-uniform flow do not drag on each other (see [`coupling`]). Both are one expression evaluated with the same operands
-//!   from either side, so they are equal and opposite per pair to round-off.
+//!   together in a non-uniform flow do not drag on each other (see [`coupling`]). Both are
+//!   one expression evaluated with the same operands from either side, so they are equal and
+//!   opposite per pair to round-off.
 //! - **Walls** keep two extrapolated records per marker (Adami et al. 2012), one from the soil
 //!   and one from the water, and each phase meets the record of its own phase; the soil's
 //!   pore-pressure term also sees the markers' extrapolated pore pressure, and the water's
@@ -395,9 +396,9 @@ pub(crate) fn marker_pressures<T: Real, K: Kernel<T>>(
 /// up to 2h apart: a soil and water moving together in any non-uniform flow (a collapse,
 /// shear) then drag on each other as if they slipped: an artificial viscosity of about
 /// `C ⟨r²⟩ / 6`, `⟨r²⟩ = 0.8 h²` for Wendland C2 (120 Pa s at k = 1e-3 m/s and h = 2.4 cm,
-/// ten times the soil's artificial viscosity). With the midpoint correction the pair's relative velocity vanishes
-/// to second order in r for a common smooth field, while a true slip (Darcy flow) is kept;
-/// the expression is still the exact negative of its partner's.
+/// ten times the soil's artificial viscosity). With the midpoint correction the pair's
+/// relative velocity vanishes to second order in r for a common smooth field, while a true
+/// slip (Darcy flow) is kept; the expression is still the exact negative of its partner's.
 #[inline(always)]
 fn coupling<T: Real, K: Kernel<T>>(
     c: &PairConsts<T>,
