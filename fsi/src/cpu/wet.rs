@@ -12,9 +12,12 @@
 //! so that at steady state `n (v_w − v_s) = −(k / γ_w)(∇p − ρ_w g)` (Darcy) and the soil's
 //! constitutive model acts on the effective stress (Terzaghi). Discretisation:
 //!
-//! - **Porosity by smoothed volume fractions.** `n_a = 1 − Σ_s V^g_s W_as`, the grain volume
-//!   `V^g = m / ρ_g` of the soil particles smoothed by the kernel and divided by the kernel's
-//!   sum over the starting lattice (so that the undisturbed soil reads its nominal porosity);
+//! - **Porosity by smoothed volume fractions.** `1 − n_a = Σ_s V^g_s W_as / max(Σ_s V_s W_as,
+//!   χ L)`: the grain volume `V^g = m / ρ_g` of the soil particles smoothed by the kernel and
+//!   divided by the kernel's sum L over the starting lattice (so that the undisturbed soil
+//!   reads its nominal porosity), and by the soil's own volume sum where the soil fills the
+//!   support (χ: [`WetSetup::full_support`]), so that inside the soil the porosity is the
+//!   Shepard mean of the soil's own and does not dip as the water crosses the soil's lattice;
 //!   boundary markers count as soil with the mean solid fraction of the soil next to them, so
 //!   a wall does not read as a pore. A water particle's density ρ̄ is its partial density
 //!   n ρ_w (continuity over water neighbours), its intrinsic density is ρ̄ / n and its
@@ -75,6 +78,13 @@ pub(crate) struct WetSetup<T> {
     /// term and the two cancel to `n ∇p` (scaled, they would leave `(M − (1 − n)) ∇p`, an
     /// error of the moment amplified by 1 / n).
     pub lattice_sum: T,
+    /// The least kernel sum a full support of the starting lattice gives anywhere in a
+    /// lattice cell, over its sum at a lattice site (0.973 for Wendland C2 at h = 1.2 d0,
+    /// lowest at the cell's centre). A water particle whose soil volume sum reads at least
+    /// this much of the site's sits inside the soil: its porosity is then taken from the
+    /// soil's own solid fraction (a Shepard mean) rather than from the kernel sum, whose
+    /// dips between lattice sites would otherwise read as pore space. See [`porosity`].
+    pub full_support: T,
     /// How the drag is spread over the pairs.
     pub drag: Drag,
 }
@@ -82,8 +92,13 @@ pub(crate) struct WetSetup<T> {
 impl<T: Real> WetSetup<T> {
     /// The water of `materials`: `None` for a dry scene; an error when there are two water
     /// materials or a soil without `permeability` shares the scene with water. `lattice_sum`
-    /// is the kernel's sum over the particles' starting lattice.
-    pub fn of(materials: &[Material<T>], lattice_sum: f64, drag: Drag) -> Result<Option<Self>, String> {
+    /// is the kernel's sum over the particles' starting lattice at a lattice site,
+    /// `full_support` the least fraction of it a point inside a cell sees.
+    pub fn of(
+        materials: &[Material<T>],
+        (lattice_sum, full_support): (f64, f64),
+        drag: Drag,
+    ) -> Result<Option<Self>, String> {
         let mut found = None;
         for m in materials {
             if let Rheology::Water(w) = m.rheology {
@@ -96,6 +111,7 @@ impl<T: Real> WetSetup<T> {
                     gamma: m.density * T::of(STANDARD_GRAVITY),
                     inv_lattice_sum: T::of(1.0 / lattice_sum),
                     lattice_sum: T::of(lattice_sum),
+                    full_support: T::of(full_support),
                     drag,
                 });
             }
@@ -315,7 +331,13 @@ pub(crate) fn porosity<T: Real, K: Kernel<T>>(
                         }
                     }
                 }
-                let n = (T::one() - solid).max(T::of(MIN_POROSITY));
+                // `solid` is Σ V^g W / L and `vs / L` how much of the support the soil fills
+                // (about 1 inside). Where it fills it, their ratio is the Shepard mean of the
+                // soil's own solid fraction, which does not change as the water moves across
+                // the soil's lattice; where it fills less than any full lattice would (a
+                // surface, a layer's face), the smoothed volume fraction over χ.
+                let presence = (vs * setup.inv_lattice_sum).max(setup.full_support);
+                let n = (T::one() - solid / presence).max(T::of(MIN_POROSITY));
                 let p = setup.water.pressure(pa.rho / n, setup.rest);
                 let s = Sym3::iso(-p / (pa.rho * pa.rho));
                 let inv_sum = match setup.drag {
@@ -617,6 +639,20 @@ mod tests {
     use super::*;
     use crate::kernel::WendlandC2;
 
+    /// The pair constants of a Wendland C2 kernel of smoothing length `h`, no viscosity nor
+    /// gravity.
+    fn consts(h: f64) -> PairConsts<f64> {
+        PairConsts {
+            h,
+            inv_h: 1.0 / h,
+            alpha: <WendlandC2 as Kernel<f64>>::alpha(h),
+            support2: 4.0 * h * h,
+            visc_alpha: 0.0,
+            eta2: 0.01 * h * h,
+            gravity: Vec3::zero(),
+        }
+    }
+
     /// Soil and water on the same cubic lattice (d0 = 1 cm, h = 1.2 d0, Wendland C2) moving
     /// together in the shear flow `u = (a z², 0, 0)`: the drag on the water particle at the
     /// origin, summed over its soil pairs. Taken plainly (`v_w − v_s`), it is the artificial
@@ -630,15 +666,7 @@ mod tests {
         type K = WendlandC2;
         let d0 = 0.01_f64;
         let h = 1.2 * d0;
-        let c = PairConsts {
-            h,
-            inv_h: 1.0 / h,
-            alpha: <K as Kernel<f64>>::alpha(h),
-            support2: 4.0 * h * h,
-            visc_alpha: 0.0,
-            eta2: 0.01 * h * h,
-            gravity: Vec3::zero(),
-        };
+        let c = consts(h);
         let a = 50.0; // 1/(m s): u_x = a z², ∇²u_x = 2a.
         let u = |x: Vec3<f64>| Vec3::new(a * x.z * x.z, 0.0, 0.0);
         let vol = d0 * d0 * d0;
@@ -705,5 +733,100 @@ mod tests {
             (slip - expected).norm2().sqrt() < 1e-9 * expected.norm2().sqrt(),
             "drag of a uniform slip {slip:?} N against {expected:?} N"
         );
+    }
+
+    /// A water particle anywhere inside a uniform soil lattice reads the soil's porosity
+    /// (n0 = 0.396), to round-off: at a site, a fifth of a spacing off, a quarter of the
+    /// diagonal, the cell's centre. The plain smoothed volume fraction reads the lattice's
+    /// dip there as pore space (n up by (1 − n0)(1 − χ) = 0.016 at the centre, checked so the
+    /// test can tell the two apart). Above a soil surface the support is not full: the water
+    /// reads the smoothed fraction over χ, between n0 and 1.
+    #[test]
+    fn water_inside_uniform_soil_reads_its_porosity_wherever_it_sits() {
+        type K = WendlandC2;
+        let cfg = crate::config::SolverConfig::default();
+        let (d0, h) = (cfg.spacing, cfg.h());
+        let (lattice_sum, chi) = super::super::lattice_sums(&cfg);
+        let c = consts(h);
+        let setup = WetSetup {
+            water: Water { sound_speed: 50.0, viscosity: 1e-3 },
+            rest: 1000.0,
+            gamma: 1000.0 * STANDARD_GRAVITY,
+            inv_lattice_sum: 1.0 / lattice_sum,
+            lattice_sum,
+            full_support: chi,
+            drag: Drag::Svf,
+        };
+        let n0 = 1.0 - 1600.0 / 2650.0;
+        let vol = d0 * d0 * d0;
+        let read = |at: [f64; 3], top: i32| {
+            // Index 0: the water particle; then the soil sites up to layer `top`.
+            let mut packed = vec![Packed {
+                x: Vec3::new(at[0] * d0, at[1] * d0, at[2] * d0),
+                v: Vec3::zero(),
+                s: Sym3::zero(),
+                vol,
+                mass: n0 * 1000.0 * vol,
+                rho: n0 * 1000.0,
+                cs: 1.0,
+            }];
+            let mut phase = vec![Phase { water: true, vg: 0.0, inv_k: 0.0 }];
+            for (i, j, k) in (-5..=5).flat_map(|i| (-5..=5).flat_map(move |j| (-5..=top).map(move |k| (i, j, k)))) {
+                let x = Vec3::new(i as f64 * d0, j as f64 * d0, k as f64 * d0);
+                packed.push(Packed {
+                    x,
+                    v: Vec3::zero(),
+                    s: Sym3::zero(),
+                    vol,
+                    mass: 1600.0 * vol,
+                    rho: 1600.0,
+                    cs: 1.0,
+                });
+                phase.push(Phase { water: false, vg: (1.0 - n0) * vol / lattice_sum, inv_k: 1e3 });
+            }
+            let m = packed.len();
+            let mut offsets = vec![0, (m - 1) as u32];
+            offsets.extend(std::iter::repeat_n((m - 1) as u32, m - 1));
+            let mut nl_ss = NeighborList::default();
+            (nl_ss.offsets, nl_ss.indices) = (offsets, (1..m as u32).collect());
+            let mut nl_sm = NeighborList::default();
+            nl_sm.offsets = vec![0; m + 1];
+            let plain: f64 = 1.0
+                - packed[1..]
+                    .iter()
+                    .zip(&phase[1..])
+                    .map(|(p, ph)| {
+                        let r2 = (p.x - packed[0].x).norm2();
+                        if r2 < c.support2 { ph.vg * <K as Kernel<f64>>::w(r2.sqrt(), c.inv_h, c.alpha) } else { 0.0 }
+                    })
+                    .sum::<f64>();
+            let mut pore = vec![Pore::default(); m];
+            porosity::<f64, K>(
+                &c,
+                &setup,
+                &nl_ss,
+                &nl_sm,
+                &phase,
+                &[],
+                (&[], vol),
+                |_| Vec3::zero(),
+                &mut packed,
+                &mut pore,
+            );
+            (pore[0].n, plain)
+        };
+        for at in [[0.0, 0.0, 0.0], [0.2, 0.0, 0.0], [0.25, 0.25, 0.25], [0.5, 0.5, 0.5]] {
+            let (n, plain) = read(at, 5);
+            eprintln!("at {at:?} d0: n = {n:.6}, plain smoothed fraction {plain:.6}");
+            assert!((n - n0).abs() < 1e-12, "n = {n} at {at:?} against {n0}");
+            if at == [0.5, 0.5, 0.5] {
+                assert!((plain - n0 - (1.0 - n0) * (1.0 - chi)).abs() < 1e-3, "plain {plain}");
+            }
+        }
+        // One spacing above the top soil layer: a cut support.
+        let (n, plain) = read([0.0, 0.0, 1.0], 0);
+        eprintln!("above the surface: n = {n:.6}, plain {plain:.6}");
+        assert!(n > n0 + 0.1 && n < 1.0, "{n}");
+        assert!((1.0 - n - (1.0 - plain) / chi).abs() < 1e-12, "{n} against {plain} / χ");
     }
 }
