@@ -72,7 +72,13 @@ fn a_fresh_saturated_deposit_consolidates_under_its_own_weight_along_terzaghi() 
     let (e_oed, k_w, k) = (1e5, rho_w * 50.0 * 50.0, mats[0].permeability);
     // c_v with the water's compressibility (K_w / n is 62 × E_oed here).
     let cv = k / (rho_w * 9.80665 * (1.0 / e_oed + n0 / k_w));
-    let checks: Vec<f64> = std::env::var("TZ_CHECKS").map(|v| v.split(',').map(|x| x.parse().unwrap()).collect()).unwrap_or(vec![0.05, 0.2, 0.5, 1.0]);
+    let checks: Vec<f64> = std::env::var("TZ_CHECKS")
+        .map(|v| {
+            v.split(',')
+                .map(|x| x.trim().parse().unwrap_or_else(|e| panic!("TZ_CHECKS: \"{x}\" is not a T_v ({e})")))
+                .collect()
+        })
+        .unwrap_or(vec![0.05, 0.2, 0.5, 1.0]);
     let scene = common::scene(&fresh_deposit(hh() * hh() / cv * 1.001));
     let mut m = build_soil::<f64>(&scene).expect("builds");
     let d0 = scene.solver.spacing;
