@@ -185,7 +185,6 @@ fn momentum_balance(drag: &str) {
     );
     let scene = common::scene(&text);
     let mut m = build_soil::<f64>(&scene).expect("builds");
-    let total_mass: f64 = m.solver.masses().iter().map(|x| x.as_f64()).sum();
     let p0 = m.solver.momentum();
     let g = scene.solver.gravity;
     let mut t = 0.0;
@@ -193,6 +192,9 @@ fn momentum_balance(drag: &str) {
         t += m.solver.step(None).expect("step").dt;
     }
     let s = m.solver.as_cpu().expect("a CPU scene");
+    // The masses gravity acts on: the first step sets each water particle's mass from the
+    // porosity it reads (`m / ρ̄ = d0³`; everything is at rest then, so p0 is unchanged).
+    let total_mass: f64 = s.masses().iter().map(|x| x.as_f64()).sum();
     assert_eq!(s.active(), s.len(), "nothing may leave a closed box");
     let (p1, walls) = (s.momentum(), s.marker_impulse());
     let scale = total_mass * 9.81 * t;
@@ -271,4 +273,128 @@ fn a_saturated_column_collapses_stable_and_finite_beside_the_dry_one() {
         runouts.push(r.normalized);
     }
     eprintln!("runout (R∞ − R0)/R0 at d0 = 2 cm: dry {:.3}, saturated {:.3}", runouts[0], runouts[1]);
+}
+/// Terzaghi's average degree of consolidation for an initial excess pore pressure growing
+/// linearly with depth from zero at the drained top (a freshly deposited layer consolidating
+/// under its own buoyant weight, impermeable base): `U = 1 − Σ 4 (−1)^m / M³ exp(−M² T_v)`,
+/// `M = π (2m + 1) / 2`.
+fn terzaghi_triangular(tv: f64) -> f64 {
+    let mut sum = 0.0;
+    for m in 0..200 {
+        let mm = std::f64::consts::PI * (2 * m + 1) as f64 / 2.0;
+        sum += 4.0 * if m % 2 == 0 { 1.0 } else { -1.0 } / mm.powi(3) * (-mm * mm * tv).exp();
+    }
+    1.0 - sum
+}
+
+#[test]
+fn the_triangular_series_starts_at_zero_and_ends_at_one() {
+    assert!(terzaghi_triangular(0.0).abs() < 1e-4);
+    assert!((terzaghi_triangular(5.0) - 1.0).abs() < 1e-5);
+    // Between the limits it rises; at T_v = 0.2 about a third (the uniform case gives 0.50).
+    let u = terzaghi_triangular(0.2);
+    assert!(u > 0.2 && u < 0.5, "{u}");
+}
+
+/// Layer height (m), and the free water over it (m).
+const TZ_H: f64 = 0.2;
+const TZ_WATER: f64 = 0.03;
+
+/// A 0.2 m saturated layer of soft elastic soil (E_oed = 0.1 MPa, k = 3.9 mm/s, 0.05 m box,
+/// d0 = 1 cm) under 3 cm of free water, that starts with no effective stress: its buoyant
+/// weight first goes to the pore water (undrained), then to the skeleton as the water drains
+/// through the top into the free water.
+fn fresh_deposit(end: f64) -> String {
+    format!(
+        "[simulation]\nend_time = {end}\nprecision = \"f64\"\n\n[sph]\nspacing = 0.01\n\n\
+         [[materials]]\nname = \"silt\"\nmodel = \"elastic\"\ndensity = 1600\ngrain_density = 2650\n\
+         permeability = 3.9e-3\nyoungs_modulus = {e}\npoisson_ratio = 0.3\n\
+         [[materials]]\nname = \"water\"\nmodel = \"water\"\ndensity = 1000\nsound_speed = 50\nviscosity = 1e-3\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.05, 0.05, {top}]\nsoil_contact = \"smooth\"\n\n\
+         [[soil_blocks]]\nmaterial = \"silt\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.05, 0.05, {TZ_H}]\n\
+         initial_pressure = 1.0\n\n\
+         [[water_blocks]]\nmaterial = \"water\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.05, 0.05, {hw}]\n",
+        // E_oed = E (1 − ν) / ((1 + ν)(1 − 2ν)) = 0.1 MPa.
+        e = 1e5 * 1.3 * 0.4 / 0.7,
+        top = 1.5 * TZ_H + TZ_WATER,
+        hw = TZ_H + TZ_WATER,
+    )
+}
+
+/// Issue 18's Terzaghi check: the settlement degree U of a fresh saturated deposit within 10 %
+/// of the series at T_v = 0.05, 0.2, 0.5 and 1. The drained top is the soil's face under 3 cm
+/// of free water: more than the kernel support (2h = 2.4 cm), so the water's own free surface
+/// is out of reach of the soil. With the top at the free surface the layer drains too fast
+/// (docs/two_phase.md, "Terzaghi consolidation"). Measured (2 vCPU, about 150 s): −2.5 / −0.5 /
+/// +0.1 / −1.2 %. A layer half as high misses early (−7 to −17 % at T_v = 0.05 depending on the
+/// box, the depth of water and d0; our guess, not verified: its consolidation time is then
+/// only a few acoustic crossings of the layer at c = 50 m/s, and Terzaghi's theory is
+/// quasi-static).
+#[test]
+fn a_fresh_saturated_deposit_consolidates_under_its_own_weight_along_terzaghi() {
+    let worst = consolidate(&fresh_deposit, TZ_H, &[0.05, 0.2, 0.5, 1.0], |_, _| {});
+    assert!(worst < 0.10, "U off the series by up to {:.1} %", 100.0 * worst);
+}
+
+/// Runs the deposit of `scene(end)` (a soil block `h` m high under water, the first material
+/// the soil, the second the water, E_oed = 0.1 MPa, water sound speed 50 m/s) to each T_v of
+/// `checks`, prints U against the series and calls `each` there; returns the largest
+/// relative error. U is measured on the soil's top layer (its particles followed by id)
+/// between the undrained settlement (the water taking K_w / n of the stiffness) and the final
+/// one, γ' h² / (2 E_oed).
+fn consolidate(
+    scene: &dyn Fn(f64) -> String,
+    h: f64,
+    checks: &[f64],
+    mut each: impl FnMut(&regolith::fsi::cpu::CpuSph<f64>, f64),
+) -> f64 {
+    let mats: Vec<_> =
+        common::scene(&scene(1.0)).materials.iter().map(|m| m.params.build::<f64>().expect("m")).collect();
+    let (rho_s, rho_w) = (mats[0].density, mats[1].density);
+    let n0 = 1.0 - rho_s / mats[0].grain_density;
+    let (e_oed, k_w, k) = (1e5, rho_w * 50.0 * 50.0, mats[0].permeability);
+    // c_v with the water's compressibility (K_w / n is 62 × E_oed here).
+    let cv = k / (rho_w * 9.80665 * (1.0 / e_oed + n0 / k_w));
+    let scene = common::scene(&scene(h * h / cv * 1.001));
+    let mut m = build_soil::<f64>(&scene).expect("builds");
+    let d0 = scene.solver.spacing;
+    let top: std::collections::HashSet<u32> = {
+        let s = m.solver.as_cpu().expect("cpu");
+        (0..s.active())
+            .filter(|&i| {
+                !s.materials()[s.material_ids()[i] as usize].is_water() && s.positions()[i].as_f64()[2] > h - 0.5 * d0
+            })
+            .map(|i| s.ids()[i])
+            .collect()
+    };
+    assert!(!top.is_empty(), "no soil in the top layer");
+    let top_layer = |s: &regolith::fsi::cpu::CpuSph<f64>| -> f64 {
+        let z: Vec<f64> =
+            (0..s.active()).filter(|&i| top.contains(&s.ids()[i])).map(|i| s.positions()[i].as_f64()[2]).collect();
+        z.iter().sum::<f64>() / z.len() as f64
+    };
+    let z0 = top_layer(m.solver.as_cpu().expect("cpu"));
+    let g = -scene.solver.gravity[2];
+    let gamma_b = (rho_s + n0 * rho_w - rho_w) * g;
+    let s_inf = gamma_b * h * h / (2.0 * e_oed);
+    let s_0 = gamma_b * h * h / (2.0 * (e_oed + k_w / n0));
+    let mut worst: f64 = 0.0;
+    for &tv in checks {
+        let t_check = tv * h * h / cv;
+        while m.solver.time() < t_check * (1.0 - 1e-12) {
+            m.solver.step(Some(t_check - m.solver.time())).expect("step");
+        }
+        let s = m.solver.as_cpu().expect("cpu");
+        let settled = z0 - top_layer(s);
+        let (u, u_ref) = ((settled - s_0) / (s_inf - s_0), terzaghi_triangular(tv));
+        eprintln!(
+            "T_v = {tv:.2} (t = {:.4} s): settlement {:.4} mm, U = {u:.3} against {u_ref:.3} ({:+.1} %)",
+            s.time(),
+            1e3 * settled,
+            100.0 * (u / u_ref - 1.0)
+        );
+        worst = worst.max((u / u_ref - 1.0).abs());
+        each(s, tv);
+    }
+    worst
 }

@@ -1135,7 +1135,8 @@ impl<T: Real> CpuSph<T> {
 
     /// Sets each water particle's partial density from the porosity the soil gives it where it
     /// starts and the pore pressure it was given (its initial stress −p I): `ρ̄ = n ρ_w(p)`, so
-    /// that the discrete porosity, not the nominal one, starts the water at that pressure.
+    /// that the discrete porosity, not the nominal one, starts the water at that pressure; and
+    /// its mass so that it starts with the volume of its lattice cell, `m / ρ̄ = d0³`.
     fn init_water(&mut self) {
         let Some(setup) = self.wet else { return };
         match self.cfg.kernel {
@@ -1144,9 +1145,16 @@ impl<T: Real> CpuSph<T> {
         }
         let m = self.near;
         let (phase, pore, sigma) = (&self.phase[..m], &self.pore[..m], &self.sigma[..m]);
-        self.rho[..m].par_iter_mut().enumerate().for_each(|(i, r)| {
+        // Each water particle starts with the volume of its lattice cell, `m / ρ̄ = d0³`,
+        // wherever it sits: its mass follows the porosity it reads. The generator's mass
+        // (`n0 ρ_w d0³` in the soil, `ρ_w d0³` in free water) is right only away from the
+        // soil's faces; at a face the water's SPH partition of space would otherwise be uneven
+        // (up to 1 / n0 in volume) just where the drainage boundary is.
+        let vol = T::of(self.cfg.spacing.powi(3));
+        self.rho[..m].par_iter_mut().zip(self.mass[..m].par_iter_mut()).enumerate().for_each(|(i, (r, ms))| {
             if phase[i].water {
                 *r = pore[i].n * setup.water.density_at(sigma[i].pressure().max(T::zero()), setup.rest);
+                *ms = *r * vol;
             }
         });
         self.water_ready = true;
