@@ -134,12 +134,13 @@ fn a_saturated_bed_at_rest_carries_hydrostatic_pore_pressure_and_the_buoyant_eff
 
 /// Steady seepage through a 0.1 m layer (10 spacings) on a filter stone under 0.1 m of water
 /// (`regolith study darcy`'s column at d0 = 1 cm): Darcy's law holds inside the layer within
-/// 5 % (measured +1.35 %: the flux against the pore-pressure gradient fitted there), and
-/// within 15 % against the imposed heads (measured +13.53 %: the layer acts about 1.2 d0
-/// thinner, the porosity and the drag being smoothed over h across its faces; the error falls
-/// with d0, +38.3 / +13.5 / −3.1 % at d0 = 2 / 1 / 0.5 cm, docs/two_phase.md). The bound was
-/// 10 % (measured +8.30 %) until the porosity inside the soil became the Shepard mean of the
-/// soil's own (the Terzaghi miss halved; the finer level moved from −4.7 to −3.1 %).
+/// 5 % (measured −1.35 %: the flux against the pore-pressure gradient fitted there), and
+/// within 15 % against the imposed heads (measured +9.39 %: the layer acts thinner, the
+/// porosity and the drag being smoothed over h across its faces; the error falls at first
+/// order, +18.4 / +9.4 / +5.5 % at d0 = 2 / 1 / 0.5 cm, docs/two_phase.md). The bound has
+/// been 10 % and 15 % as the model's faces changed (+8.3 %, then +13.5 % in session 12, then
+/// this once the water's volumes started even in session 13); 15 % is kept so that the next
+/// face change is read in the docs' ladder rather than by moving the bound again.
 #[test]
 fn water_seeps_through_a_sand_layer_on_a_filter_stone_at_the_darcy_rate() {
     let p = darcy_point(0.01, Drag::Svf).unwrap_or_else(|e| panic!("{e}"));
@@ -151,8 +152,9 @@ fn water_seeps_through_a_sand_layer_on_a_filter_stone_at_the_darcy_rate() {
 
 /// The same column with the per-particle ("bang-bang") drag: each water particle with soil in
 /// its support carries its whole drag. Inside the layer Darcy's law holds as well (measured
-/// +1.06 %, bound 5 %); against the imposed heads the layer now acts thicker, not thinner
-/// (measured −7.97 %, bound 10 %: water within 2h of the layer's faces is dragged in full).
+/// −1.93 %, bound 5 %); against the imposed heads the layer acts thicker, not thinner
+/// (measured −8.36 %, bound 10 %: water within 2h of the layer's faces is dragged in full;
+/// −15.1 / −8.4 / −5.4 % at d0 = 2 / 1 / 0.5 cm).
 #[test]
 fn the_per_particle_drag_also_gives_darcy_inside_the_layer() {
     let p = darcy_point(0.01, Drag::Particle).unwrap_or_else(|e| panic!("{e}"));
