@@ -197,10 +197,21 @@ fn bench_t<T: Real>(
 /// ω = 0.8 rad/s and moves forward at ω r (1 − 0.3) with r = 0.255 m, its axle held 0.235 m
 /// above the floor of a bed 0.2 m deep (2 cm of sinkage at the grouser tips), d0 = 2 cm,
 /// Drucker–Prager sand (φ = 30°, E = 1 MPa). The bed is `length` × 0.6 m; the wheel starts
-/// 1 m from its start. With the active region on, only the soil around the wheel is integrated.
-pub fn wheel_long_scene(length: f64, active: bool) -> Result<Scene, InputError> {
+/// 1 m from its start. With the active region on, only the soil around the wheel is integrated;
+/// with `patch = Some(l)` the soil is a moving patch of `l` m keeping 1 m ahead of the wheel.
+pub fn wheel_long_scene(length: f64, active: bool, patch: Option<f64>) -> Result<Scene, InputError> {
     if !(length.is_finite() && (3.0..=100.0).contains(&length)) {
         return Err(InputError::flag("--length", format!("must be in [3, 100] m (got {length})")));
+    }
+    if let Some(l) = patch
+        && !(l.is_finite() && l >= 2.5 && l < length)
+    {
+        return Err(InputError::flag(
+            "--patch",
+            format!(
+                "must be at least 2.5 m (the wheel, 1 m ahead of it and the support behind) and shorter than --length {length} m (got {l})"
+            ),
+        ));
     }
     let omega: f64 = 0.8;
     let v = omega * 0.255 * (1.0 - 0.3);
@@ -208,10 +219,11 @@ pub fn wheel_long_scene(length: f64, active: bool) -> Result<Scene, InputError> 
         "[simulation]\nend_time = 1000.0\nprecision = \"f32\"\nexchange_interval = 0.001\n\n\
          [sph]\nspacing = 0.02\n{active}\n\
          [[materials]]\nname = \"sand\"\nmodel = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 1e6\npoisson_ratio = 0.3\nfriction_angle = 30.0\n\n\
-         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [{length}, 0.6, 0.6]\n\n[terrain]\nmaterial = \"sand\"\ndepth = 0.2\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [{length}, 0.6, 0.6]\n\n[terrain]\nmaterial = \"sand\"\ndepth = 0.2\n{patch}\n\
          [[bodies]]\nname = \"wheel\"\nshape = {{ type = \"wheel\", radius = 0.225, width = 0.2, grousers = 24, grouser_height = 0.03, grouser_thickness = 0.01 }}\n\
          mass = 17.5\nposition = [1.0, 0.3, 0.435]\nmotion = {{ type = \"prescribed\", linear_velocity = [{v}, 0.0, 0.0], angular_velocity = [0.0, {w}, 0.0] }}\n",
         active = if active { "\n[sph.active]\nenabled = true\n" } else { "" },
+        patch = patch.map_or(String::new(), |l| format!("patch = {{ length = {l}, trigger = 1.0 }}\n")),
         w = omega.to_degrees(),
     );
     load_scene_source(Path::new("<bench wheel-long>"), &text, &[])
@@ -222,6 +234,8 @@ pub fn wheel_long_scene(length: f64, active: bool) -> Result<Scene, InputError> 
 pub struct WheelBenchResult {
     /// Active region on.
     pub active: bool,
+    /// Moving patch length (m), if one.
+    pub patch: Option<f64>,
     /// Soil particles in the bed.
     pub particles: usize,
     /// Wall and wheel markers.
@@ -284,6 +298,7 @@ pub fn run_wheel_long(scene: &Scene, warmup: u64, exchanges: u64) -> Result<Whee
     let f = &sim.system.fluid;
     Ok(WheelBenchResult {
         active: scene.active.is_some(),
+        patch: scene.patch.map(|p| p.length),
         particles: f.len(),
         markers: f.marker_positions().len(),
         awake_mean: awake_steps / steps.max(1) as f64,

@@ -19,7 +19,7 @@ use regolith_fsi::{Real, SolverError};
 use regolith_rigid::{BodyId, BodyState, JointDesc, JointId, Pose, ShapeDesc};
 use regolith_terrain::TerrainBuild;
 
-use crate::build::{BuildError, SurfaceGrid, assemble};
+use crate::build::{BuildError, Patch, SurfaceGrid, assemble};
 use crate::scene::{Scene, load_scene};
 
 /// A body of a [`Simulation`]: got from [`Simulation::body`] or [`Simulation::bodies`], so it
@@ -56,6 +56,8 @@ pub struct Simulation<T: Real> {
     vehicle_joints: Vec<Vec<Option<JointId>>>,
     /// Initial soil surface, for sinkage.
     surface0: SurfaceGrid,
+    /// The moving patch (`[terrain] patch`), if any.
+    patch: Option<Patch>,
     /// Identity carried by this simulation's [`Body`] handles.
     uid: u64,
 }
@@ -90,6 +92,7 @@ impl<T: Real> Simulation<T> {
             fsi: a.fsi,
             vehicle_joints: a.vehicle_joints,
             surface0: a.surface0,
+            patch: a.patch,
             uid: NEXT_SIMULATION.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         };
         sim.apply_drives();
@@ -171,7 +174,36 @@ impl<T: Real> Simulation<T> {
         // A device backend refreshes its host copy of the particles once per exchange, for
         // the series, rigs and recording that read them (a no-op on the CPU).
         self.system.fluid.sync()?;
+        self.follow_patch()?;
         Ok(r)
+    }
+
+    /// The moving patch, if the scene has one (where it is, how often it advanced).
+    pub fn patch(&self) -> Option<&Patch> {
+        self.patch.as_ref()
+    }
+
+    /// Moves the patch forward if the FSI bodies have come within its trigger distance of its
+    /// front (see [`crate::build::Patch`]).
+    fn follow_patch(&mut self) -> Result<(), SolverError> {
+        let Some(patch) = &mut self.patch else { return Ok(()) };
+        let markers = self.system.fluid.marker_positions();
+        let (mut back, mut front) = (f64::INFINITY, f64::NEG_INFINITY);
+        for b in &self.system.interface.bodies {
+            for p in &markers[b.markers.clone()] {
+                let x = p.x.as_f64();
+                back = back.min(x);
+                front = front.max(x);
+            }
+        }
+        if !front.is_finite() {
+            return Ok(());
+        }
+        let Some(relay) = patch.follow(front, back).map_err(SolverError::Setup)? else { return Ok(()) };
+        self.surface0.add(relay.fresh.iter().map(|p| p.pos));
+        let lifted = self.system.fluid.relay(relay.cut, relay.shift, &relay.fresh)?;
+        patch.lifted(lifted);
+        Ok(())
     }
 
     /// Sets every vehicle's wheel motor targets and steering angles for the current time.

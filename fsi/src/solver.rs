@@ -12,7 +12,7 @@ use crate::active::ActiveDomain;
 use crate::config::SolverConfig;
 use crate::cpu::CpuSph;
 use crate::math::{Sym3, Vec3};
-use crate::particles::{SolverError, StepReport};
+use crate::particles::{ParticleInit, SolverError, StepReport};
 use crate::rheology::{Material, PointState};
 
 /// The markers of one body: where they sit in the marker array and their body-frame positions.
@@ -110,6 +110,13 @@ pub trait SphSolver<T: Real>: Send {
     /// Classifications of the active region so far (0 without one).
     fn classifications(&self) -> u64 {
         0
+    }
+    /// Moves a patch of the bed forward along x (see [`CpuSph::relay`]): lifts the soil at
+    /// `x < cut`, lays `fresh` particles and shifts the fixed walls by `shift`. Returns how
+    /// many particles were lifted. Backends without moving patches refuse.
+    fn relay(&mut self, cut: f64, shift: f64, fresh: &[ParticleInit]) -> Result<usize, SolverError> {
+        let _ = (cut, shift, fresh);
+        Err(SolverError::Setup(format!("the {} backend has no moving patch", self.backend())))
     }
     /// One step of at most `max_dt` (s).
     fn step(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError>;
@@ -223,6 +230,9 @@ impl<T: Real> SphSolver<T> for CpuSph<T> {
     }
     fn classifications(&self) -> u64 {
         CpuSph::classifications(self)
+    }
+    fn relay(&mut self, cut: f64, shift: f64, fresh: &[ParticleInit]) -> Result<usize, SolverError> {
+        CpuSph::relay(self, cut, shift, fresh)
     }
     fn set_permeable(&mut self, permeable: &[bool]) -> Result<(), SolverError> {
         CpuSph::set_permeable(self, permeable)

@@ -7,10 +7,12 @@
 
 pub mod backend;
 mod bodies;
+mod patch;
 mod surface;
 mod vehicles;
 
 pub use bodies::carve_bodies;
+pub use patch::{Patch, Relay};
 pub use surface::SurfaceGrid;
 pub use vehicles::{build_vehicle_joints, place_vehicles};
 
@@ -19,7 +21,7 @@ use regolith_fsi::active::{ActiveDomain, BodyBox};
 use regolith_fsi::rheology::{Material, ParamError};
 use regolith_fsi::{Real, SolverError, SphSolver};
 use regolith_rigid::{BodyId, JointId, Motion, RigidError, RigidWorld};
-use regolith_terrain::{RegionSpec, TerrainBuild, TerrainError, build_terrain};
+use regolith_terrain::{Aabb, RegionSpec, TerrainBuild, TerrainError, build_terrain};
 
 use crate::input::InputError;
 use crate::scene::{Backend, Scene};
@@ -157,28 +159,21 @@ pub struct SoilModel<T: Real> {
 
 /// A scene's materials in precision `T` and its terrain (soil particles, wall markers,
 /// domain), as generated from its soil regions.
+/// With `[terrain] patch`, the soil and walls of the patch where it starts.
 pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, TerrainBuild), BuildError> {
-    let mats64: Vec<Material<f64>> = scene.materials.iter().map(|m| m.params.build()).collect::<Result<_, _>>()?;
     let mats: Vec<Material<T>> = scene.materials.iter().map(|m| m.params.build()).collect::<Result<_, _>>()?;
-    let container = scene.container.ok_or(BuildError::NoContainer)?;
-    let regions: Vec<RegionSpec> = scene
-        .soil
-        .iter()
-        .map(|s| RegionSpec {
-            region: s.region.clone(),
-            material: s.material as u16,
-            velocity: s.velocity,
-            initial_pressure: s.initial_pressure,
-        })
-        .collect();
-    let terrain = build_terrain(
-        &container,
-        scene.solver.spacing,
-        scene.solver.bce_layers,
-        scene.solver.gravity,
-        &regions,
-        &mats64,
-    )
+    let (mats64, regions, container) = terrain_inputs(scene)?;
+    let terrain = match scene_patch(scene)? {
+        Some(p) => p.generate(p.window()),
+        None => build_terrain(
+            &container,
+            scene.solver.spacing,
+            scene.solver.bce_layers,
+            scene.solver.gravity,
+            &regions,
+            &mats64,
+        ),
+    }
     .map_err(|e| match e {
         TerrainError::Overlap { first, second, at } => {
             BuildError::SoilOverlap { first: scene.soil[first].key.clone(), second: scene.soil[second].key.clone(), at }
@@ -190,6 +185,34 @@ pub fn scene_terrain<T: Real>(scene: &Scene) -> Result<(Vec<Material<T>>, Terrai
         terrain.markers.clear();
     }
     Ok((mats, terrain))
+}
+
+/// What the terrain generator takes from a scene: its materials in f64, its soil regions and
+/// its container.
+type TerrainInputs = (Vec<Material<f64>>, Vec<RegionSpec>, Aabb);
+
+/// A scene's [`TerrainInputs`].
+fn terrain_inputs(scene: &Scene) -> Result<TerrainInputs, BuildError> {
+    let mats64: Vec<Material<f64>> = scene.materials.iter().map(|m| m.params.build()).collect::<Result<_, _>>()?;
+    let container = scene.container.ok_or(BuildError::NoContainer)?;
+    let regions: Vec<RegionSpec> = scene
+        .soil
+        .iter()
+        .map(|s| RegionSpec {
+            region: s.region.clone(),
+            material: s.material as u16,
+            velocity: s.velocity,
+            initial_pressure: s.initial_pressure,
+        })
+        .collect();
+    Ok((mats64, regions, container))
+}
+
+/// The scene's moving patch where it starts (`None` without `[terrain] patch`).
+pub fn scene_patch(scene: &Scene) -> Result<Option<Patch>, BuildError> {
+    let Some(spec) = scene.patch else { return Ok(None) };
+    let (mats64, regions, container) = terrain_inputs(scene)?;
+    Ok(Some(Patch::new(scene, spec, regions, mats64, &container)))
 }
 
 /// Builds the soil solver of a terrain scene (bodies ignored) in precision `T`.
@@ -262,6 +285,8 @@ pub struct Assembly<T: Real> {
     pub vehicle_joints: Vec<Vec<Option<JointId>>>,
     /// The initial soil surface (for sinkage).
     pub surface0: SurfaceGrid,
+    /// The moving patch (`[terrain] patch`), where it starts.
+    pub patch: Option<Patch>,
 }
 
 /// The active region of a scene (`[sph.active]`): one box per FSI body, its markers' bounding
@@ -291,7 +316,16 @@ pub fn active_domain(scene: &Scene, fsi_bodies: &[(BodyId, Vec<[f64; 3]>)]) -> O
 pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
     let (mats, terrain) = scene_terrain::<T>(scene)?;
     let d0 = scene.solver.spacing;
-    let surface0 = SurfaceGrid::new(terrain.particles.iter().map(|p| p.pos), d0);
+    let patch = scene_patch(scene)?;
+    let surface0 = if patch.is_some() {
+        // The surface of the whole bed, filled in as the patch lays it.
+        let c = &terrain.container;
+        let mut g = SurfaceGrid::covering([c.min[0] + d0, c.min[1] + d0], [c.max[0] - d0, c.max[1] - d0], d0);
+        g.add(terrain.particles.iter().map(|p| p.pos));
+        g
+    } else {
+        SurfaceGrid::new(terrain.particles.iter().map(|p| p.pos), d0)
+    };
     let mut scene = scene.clone();
     place_vehicles(&mut scene, &surface0)?;
     let mut terrain = terrain;
@@ -357,5 +391,5 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
         system.fluid.set_active_domain(Some(a))?;
     }
     let fsi = ids.iter().map(|id| system.fsi_body(*id)).collect();
-    Ok(Assembly { system, scene, terrain, ids, fsi, vehicle_joints, surface0 })
+    Ok(Assembly { system, scene, terrain, ids, fsi, vehicle_joints, surface0, patch })
 }

@@ -25,16 +25,31 @@ impl SurfaceGrid {
         if !lo[0].is_finite() {
             return Self { origin: [0.0; 2], cell: d0, nx: 0, ny: 0, top: Vec::new() };
         }
+        let mut g = Self::covering(lo, hi, d0);
+        g.add(points);
+        g
+    }
+
+    /// An empty grid (no soil anywhere yet) for particle centres in `[lo, hi]` (x, y).
+    pub fn covering(lo: [f64; 2], hi: [f64; 2], d0: f64) -> Self {
         let origin = [lo[0] - 0.5 * d0, lo[1] - 0.5 * d0];
         let nx = ((hi[0] - origin[0]) / d0).floor() as usize + 1;
         let ny = ((hi[1] - origin[1]) / d0).floor() as usize + 1;
-        let mut top = vec![f64::NEG_INFINITY; nx * ny];
-        for p in points {
-            let i = (((p[0] - origin[0]) / d0) as usize).min(nx - 1);
-            let j = (((p[1] - origin[1]) / d0) as usize).min(ny - 1);
-            top[j * nx + i] = top[j * nx + i].max(p[2] + 0.5 * d0);
+        Self { origin, cell: d0, nx, ny, top: vec![f64::NEG_INFINITY; nx * ny] }
+    }
+
+    /// Raises the surface to the tops of these particles' cells (points off the grid count
+    /// in its edge cells).
+    pub fn add(&mut self, points: impl Iterator<Item = [f64; 3]>) {
+        if self.nx == 0 {
+            return;
         }
-        Self { origin, cell: d0, nx, ny, top }
+        let (o, d0, nx, ny) = (self.origin, self.cell, self.nx, self.ny);
+        for p in points {
+            let i = ((p[0] - o[0]) / d0).floor().clamp(0.0, (nx - 1) as f64) as usize;
+            let j = ((p[1] - o[1]) / d0).floor().clamp(0.0, (ny - 1) as f64) as usize;
+            self.top[j * nx + i] = self.top[j * nx + i].max(p[2] + 0.5 * d0);
+        }
     }
 
     /// Highest surface within `r` of `(x, y)` (`None` off the soil).

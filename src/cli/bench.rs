@@ -114,6 +114,7 @@ pub(super) fn run(
 pub(super) fn wheel_long(
     active: ActiveArg,
     length: f64,
+    patch: Option<f64>,
     skin: &[f64],
     steps: u64,
     warmup: u64,
@@ -122,22 +123,27 @@ pub(super) fn wheel_long(
     if steps == 0 {
         return Err(InputError::flag("--steps", "must be at least 1").into());
     }
-    let modes = match active {
-        ActiveArg::On => vec![true],
-        ActiveArg::Off => vec![false],
-        ActiveArg::Both => vec![false, true],
+    // (active region, patch length) of each run.
+    let mut modes: Vec<(bool, Option<f64>)> = match active {
+        ActiveArg::On => vec![(true, None)],
+        ActiveArg::Off => vec![(false, None)],
+        ActiveArg::Both => vec![(false, None), (true, None)],
     };
+    if patch.is_some() {
+        modes.push((false, patch));
+    }
     let skins = skins(skin)?;
     let mut results = Vec::new();
-    for (skin, on) in skins.iter().flat_map(|&s| modes.iter().map(move |&on| (s, on))) {
-        let mut scene = wheel_long_scene(length, on)?;
+    for (skin, (on, patch)) in skins.iter().flat_map(|&s| modes.iter().map(move |&m| (s, m))) {
+        let mut scene = wheel_long_scene(length, on, patch)?;
         if let Some(s) = skin {
             scene.solver.neighbor_skin = s;
         }
         let r = run_wheel_long(&scene, warmup, steps).context("bench run failed")?;
         println!(
-            "bench wheel-long active {} skin {} h: {} particles ({:.0} integrated per step), {} markers; {} exchanges, {} steps (dt {:.3e} s, {} list builds, {} steps redone) in {:.2} s ({} classifications): {:.3e} simulated s per wall s, {:.3e} particle-steps/s; wheel force x {:.2} N, z {:.2} N ({} threads)",
+            "bench wheel-long active {}{} skin {} h: {} particles ({:.0} integrated per step), {} markers; {} exchanges, {} steps (dt {:.3e} s, {} list builds, {} steps redone) in {:.2} s ({} classifications): {:.3e} simulated s per wall s, {:.3e} particle-steps/s; wheel force x {:.2} N, z {:.2} N ({} threads)",
             if r.active { "on " } else { "off" },
+            r.patch.map_or(String::new(), |l| format!(" patch {l} m")),
             r.neighbor_skin,
             r.particles,
             r.awake_mean,
@@ -161,8 +167,9 @@ pub(super) fn wheel_long(
     if let [base, rest @ ..] = &results[..] {
         for r in rest {
             println!(
-                "bench wheel-long: active {} skin {} h against active {} skin {} h: speed-up {:.2}x (simulated s per wall s); wheel force x {:+.2} %, z {:+.2} %",
+                "bench wheel-long: active {}{} skin {} h against active {} skin {} h: speed-up {:.2}x (simulated s per wall s); wheel force x {:+.2} %, z {:+.2} %",
                 if r.active { "on" } else { "off" },
+                r.patch.map_or(String::new(), |l| format!(" patch {l} m")),
                 r.neighbor_skin,
                 if base.active { "on" } else { "off" },
                 base.neighbor_skin,

@@ -659,6 +659,10 @@ pub enum Command {
         /// wheel-long only: bed length (m).
         #[arg(long, value_name = "M")]
         length: Option<f64>,
+        /// wheel-long only: also time the wheel on a moving patch of this length (m) with the
+        /// active region off, against the whole bed.
+        #[arg(long, value_name = "M")]
+        patch: Option<f64>,
         /// Verlet skins of the neighbour lists to time, multiples of h, comma-separated (e.g.
         /// `0,0.3`: rebuilt every step against reused lists, in one run); default: the scene
         /// default.
@@ -735,6 +739,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             scene: BenchSceneArg::WheelLong,
             active,
             length,
+            patch,
             steps,
             warmup,
             json,
@@ -744,16 +749,25 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         } => bench::wheel_long(
             active.unwrap_or(ActiveArg::Both),
             length.unwrap_or(10.0),
+            patch,
             &skin,
             steps,
             warmup,
             json.as_deref(),
         ),
-        Command::Bench { active, length, .. } if active.is_some() || length.is_some() => Err(InputError::flag(
-            if active.is_some() { "--active" } else { "--length" },
-            "applies to --scene wheel-long only".to_string(),
-        )
-        .into()),
+        Command::Bench { active, length, patch, .. } if active.is_some() || length.is_some() || patch.is_some() => {
+            Err(InputError::flag(
+                if active.is_some() {
+                    "--active"
+                } else if length.is_some() {
+                    "--length"
+                } else {
+                    "--patch"
+                },
+                "applies to --scene wheel-long only".to_string(),
+            )
+            .into())
+        }
         Command::Bench { scene: BenchSceneArg::Column, particles, model, .. }
             if particles.is_some() || model.is_some() =>
         {

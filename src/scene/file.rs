@@ -165,6 +165,14 @@ pub(crate) struct TerrainFile {
     pub depth: Option<f64>,
     pub heightmap: Option<String>,
     pub heightmap_range: Option<[f64; 2]>,
+    pub patch: Option<PatchFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct PatchFile {
+    pub length: Option<f64>,
+    pub trigger: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -55,7 +55,7 @@ use settings::{Settings, resolve_settings};
 use soil::resolve_soil;
 pub use types::{
     ActiveSpec, Backend, BodySpec, DEFAULT_ACTIVE_DEPTH_FACTOR, DEFAULT_RUNAWAY_SPEED, DEFAULT_SLEEP_SPEED, OutputSpec,
-    PlateControl, Precision, RigSpec, Scene, SceneMaterial, SoilSpec, WheelDrive,
+    PatchSpec, PlateControl, Precision, RigSpec, Scene, SceneMaterial, SoilSpec, WheelDrive,
 };
 
 pub use vehicle::{Profile, VehicleSpec, WheelSpec};
@@ -75,7 +75,7 @@ use crate::input::{InputError, parse_toml, read_text};
 use crate::material::{build_material, load_material_file};
 use file::{
     AxisName, BackendName, BlockShapeName, BodyFile, DragName, FreeSurfaceStressName, IntegratorName, KernelName,
-    MotionFile, OutputFile, PrecisionName, RigFile, RigKind, ScaleFile, SceneFile, ShapeFile, ShiftingName,
+    MotionFile, OutputFile, PatchFile, PrecisionName, RigFile, RigKind, ScaleFile, SceneFile, ShapeFile, ShiftingName,
 };
 use regolith_rigid::{Axis, BodyDesc, Grousers, MassSpec, Motion, Pose, ShapeDesc};
 
@@ -178,6 +178,13 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     if wet && active.is_some() {
         return Err(e("sph.active", "is not available with water yet: remove [sph.active] from a wet scene".into()));
     }
+    let patch = soil::resolve_patch(
+        file.terrain.as_ref().and_then(|t| t.patch.as_ref()),
+        &container,
+        (&solver, backend, wet, container_walls),
+        &bodies,
+        &e,
+    )?;
     let rig = match &file.rig {
         None => None,
         Some(r) => Some(resolve_rig(path, source, r, &bodies, &file.bodies, solver.gravity)?),
@@ -202,6 +209,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         output,
         vehicles,
         active,
+        patch,
     })
 }
 

@@ -144,6 +144,16 @@ pub fn describe(scene: &Scene) -> String {
                 .map_or(String::new(), |p| format!(", starting at an isotropic pressure of {p} Pa (not geostatic)"))
         );
     }
+    if let (Some(p), Some(c)) = (scene.patch, scene.container) {
+        let bed = c.size()[0];
+        // Particles scale with the length held (the walls too, roughly).
+        total *= p.length / bed;
+        let _ = writeln!(
+            s,
+            "  moving patch: {} m of the {bed} m bed along x (about {total:.0} particles), advancing to keep {} m of soil ahead of the foremost FSI body; soil laid ahead in its generated state",
+            p.length, p.trigger
+        );
+    }
     let mut walls = 0.0;
     if let Some(c) = scene.container
         && !scene.container_walls
@@ -154,7 +164,11 @@ pub fn describe(scene: &Scene) -> String {
             c.min, c.max
         );
     } else if let Some(c) = scene.container {
-        let sz = c.size();
+        let mut sz = c.size();
+        if let Some(p) = scene.patch {
+            // The walls are those of the patch.
+            sz[0] = p.length;
+        }
         let area = sz[0] * sz[1] + 2.0 * sz[2] * (sz[0] + sz[1]);
         walls = area / sv.spacing.powi(2) * sv.bce_layers as f64;
         let _ = writeln!(

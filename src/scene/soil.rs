@@ -275,3 +275,61 @@ pub(super) fn resolve_soil(
     }
     Ok((materials, container, soil))
 }
+
+/// `[terrain] patch`: a moving patch needs the terrain's bed, container walls to move with
+/// it, an FSI body to follow, the CPU backend and a dry scene; its length must hold the
+/// trigger distance twice over and be shorter than the bed.
+pub(super) fn resolve_patch(
+    patch: Option<&PatchFile>,
+    container: &Option<Aabb>,
+    (solver, backend, wet, walls): (&SolverConfig, Backend, bool, bool),
+    bodies: &[BodySpec],
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<Option<PatchSpec>, InputError> {
+    let Some(p) = patch else { return Ok(None) };
+    let Some(c) = container else {
+        return Err(e("terrain.patch", "needs a [container]: the patch is a slice of its bed".into()));
+    };
+    let support = 2.0 * solver.h();
+    let trigger = p.trigger.ok_or_else(|| {
+        e("terrain.patch.trigger", "is required: soil kept ahead of the foremost FSI body (m)".into())
+    })?;
+    if !(trigger.is_finite() && trigger >= 2.0 * support) {
+        return Err(e(
+            "terrain.patch.trigger",
+            format!("must be at least twice the kernel support, 4h = {} m (got {trigger})", 2.0 * support),
+        ));
+    }
+    let length = p
+        .length
+        .ok_or_else(|| e("terrain.patch.length", "is required: length of the simulated patch along x (m)".into()))?;
+    let bed = c.size()[0];
+    if !(length.is_finite() && length >= 2.0 * trigger && length < bed) {
+        return Err(e(
+            "terrain.patch.length",
+            format!(
+                "must be at least twice terrain.patch.trigger ({} m) and shorter than the container along x ({bed} m) (got {length})",
+                2.0 * trigger
+            ),
+        ));
+    }
+    if backend == Backend::Wgpu {
+        return Err(e("terrain.patch", "runs on the \"cpu\" backend only (simulation.backend = \"wgpu\")".into()));
+    }
+    if wet {
+        return Err(e(
+            "terrain.patch",
+            "is not available with water yet: remove it from a scene with [[water_blocks]]".into(),
+        ));
+    }
+    if !walls {
+        return Err(e(
+            "terrain.patch",
+            "needs the container's walls (container.walls = false): they move with the patch".into(),
+        ));
+    }
+    if !bodies.iter().any(|b| b.fsi) {
+        return Err(e("terrain.patch", "follows the scene's FSI bodies, and the scene has none".into()));
+    }
+    Ok(Some(PatchSpec { length, trigger }))
+}

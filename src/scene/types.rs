@@ -240,6 +240,20 @@ pub struct Scene {
     /// The active region (`[sph.active]` with `enabled = true`); `None` integrates the whole
     /// domain.
     pub active: Option<ActiveSpec>,
+    /// A moving patch (`[terrain] patch`); `None` simulates the whole bed.
+    pub patch: Option<PatchSpec>,
+}
+
+/// `[terrain] patch = { length, trigger }`: the soil simulates `length` metres of the bed
+/// along x, starting at the container's low-x end, and moves forward with the scene's FSI
+/// bodies: whenever less than `trigger` metres of soil lie ahead of the foremost body, rows
+/// are lifted at the back and laid ahead in their generated (geostatic) state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatchSpec {
+    /// Length of the simulated patch along x (m).
+    pub length: f64,
+    /// Soil kept ahead of the foremost FSI body (m).
+    pub trigger: f64,
 }
 
 /// The `[output]` section: where the run writes and what `recording.mcap` holds.

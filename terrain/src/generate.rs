@@ -104,6 +104,25 @@ pub fn build_terrain(
     regions: &[RegionSpec],
     materials: &[Material<f64>],
 ) -> Result<TerrainBuild, TerrainError> {
+    build_terrain_in(container, spacing, bce_layers, gravity, regions, materials, None)
+}
+
+/// Builds the soil particles and wall markers of a slice of the container along x: with
+/// `window = Some([a, b])` only the lattice columns `a < i < b` hold soil and the walls are
+/// the shell of that slice (its end walls on the planes `i = a` and `i = b`), which is what a
+/// moving patch simulates of a longer bed. Each column's state is exactly what
+/// [`build_terrain`] gives it (columns are independent: the geostatic stress integrates down
+/// a column), so slices laid side by side make up the whole bed. `None`: the whole container
+/// (as [`build_terrain`]). A slice may hold no soil; the whole container must.
+pub fn build_terrain_in(
+    container: &Aabb,
+    spacing: f64,
+    bce_layers: usize,
+    gravity: [f64; 3],
+    regions: &[RegionSpec],
+    materials: &[Material<f64>],
+    window: Option<[i64; 2]>,
+) -> Result<TerrainBuild, TerrainError> {
     let lat = Lattice::of(container, spacing);
     let snapped = lat.container();
     let mut notes = Vec::new();
@@ -116,6 +135,13 @@ pub fn build_terrain(
     }
     let [nx, ny, nz] = lat.n;
     let d0 = spacing;
+    // The end-wall planes of the slice (the container's own without a window).
+    let [xa, xb] = window.unwrap_or([0, nx]);
+    if xa >= xb || xa < 0 || xb > nx {
+        return Err(TerrainError::Setup(format!(
+            "slice of lattice columns ({xa}, {xb}) is not inside the container's 0..={nx}"
+        )));
+    }
     if let Some(spec) = regions.iter().find(|r| r.material as usize >= materials.len()) {
         return Err(TerrainError::Setup(format!("material index {} out of range", spec.material)));
     }
@@ -126,7 +152,7 @@ pub fn build_terrain(
     let mut water_cells: HashMap<[i64; 3], usize> = HashMap::new();
     let mut overlap = None;
     let mut insert = |c: [i64; 3], r: usize| {
-        if c[0] >= 1 && c[0] < nx && c[1] >= 1 && c[1] < ny && c[2] >= 1 && c[2] < nz {
+        if c[0] > xa && c[0] < xb && c[1] >= 1 && c[1] < ny && c[2] >= 1 && c[2] < nz {
             let map = if is_water(r) { &mut water_cells } else { &mut cells };
             let held = *map.entry(c).or_insert(r);
             if held != r && overlap.is_none() {
@@ -138,7 +164,7 @@ pub fn build_terrain(
         match &spec.region {
             SoilRegion::Bed { surface, .. } => {
                 let size = snapped.size();
-                for i in 1..nx {
+                for i in xa + 1..xb {
                     for j in 1..ny {
                         let p = lat.point([i, j, 0]);
                         let depth =
@@ -154,7 +180,7 @@ pub fn build_terrain(
                 let (i0, i1) = index_range(lat.origin[0], d0, b.min[0], b.max[0]);
                 let (j0, j1) = index_range(lat.origin[1], d0, b.min[1], b.max[1]);
                 let (k0, k1) = index_range(lat.origin[2], d0, b.min[2], b.max[2]);
-                for i in i0..=i1 {
+                for i in i0.max(xa + 1)..=i1.min(xb - 1) {
                     for j in j0..=j1 {
                         for k in k0..=k1 {
                             insert([i, j, k], r);
@@ -182,7 +208,7 @@ pub fn build_terrain(
     if let Some((first, second, c)) = overlap {
         return Err(TerrainError::Overlap { first, second, at: lat.point(c) });
     }
-    if cells.is_empty() && water_cells.is_empty() {
+    if window.is_none() && cells.is_empty() && water_cells.is_empty() {
         return Err(TerrainError::Setup(
             "the soil regions contain no lattice point: make them larger than the spacing".into(),
         ));
@@ -255,10 +281,10 @@ pub fn build_terrain(
     }
     let l = bce_layers as i64;
     let mut markers = Vec::new();
-    for i in -(l - 1)..=(nx + l - 1) {
+    for i in xa - (l - 1)..=(xb + l - 1) {
         for j in -(l - 1)..=(ny + l - 1) {
             for k in -(l - 1)..=nz {
-                if i <= 0 || i >= nx || j <= 0 || j >= ny || k <= 0 {
+                if i <= xa || i >= xb || j <= 0 || j >= ny || k <= 0 {
                     markers.push(MarkerInit { pos: lat.point([i, j, k]), owner: 0 });
                 }
             }
@@ -336,6 +362,44 @@ mod tests {
             // Tangential over normal traction on a horizontal plane is tan of the tilt.
             assert!((p.sigma[4] / p.sigma[2] + a.tan() / b.cos()).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn slices_laid_side_by_side_make_up_the_whole_bed() {
+        // A bed with a block on it, so that columns differ in height and stress.
+        let (c, [bed]) = flat_bed();
+        let block = RegionSpec {
+            region: SoilRegion::Block(Aabb { min: [0.04, 0.0, 0.1], max: [0.12, 0.1, 0.15] }),
+            material: 0,
+            velocity: [0.0; 3],
+            initial_pressure: None,
+        };
+        let regions = [bed, block];
+        let g = [0.0, 0.0, -9.81];
+        let whole = build_terrain(&c, 0.01, 3, g, &regions, &[dp()]).expect("builds");
+        let nx = Lattice::of(&c, 0.01).n[0];
+        let key = |p: &ParticleInit| p.pos.map(|x| (x * 1e6).round() as i64);
+        let mut parts = Vec::new();
+        // Columns a < i < b of each: 1..=6, 7, 8..nx (a slice's end walls are its
+        // neighbours' first and last columns).
+        for w in [[0, 7], [6, 8], [7, nx]] {
+            let slice = build_terrain_in(&c, 0.01, 3, g, &regions, &[dp()], Some(w)).expect("slice");
+            let x = |i: i64| i as f64 * 0.01;
+            assert!(slice.particles.iter().all(|p| p.pos[0] > x(w[0]) && p.pos[0] < x(w[1])), "{w:?}");
+            // The slice's shell: its end walls on x(a) and x(b), three layers deep.
+            let (lo, hi) =
+                slice.markers.iter().fold((f64::MAX, f64::MIN), |(l, h), m| (l.min(m.pos[0]), h.max(m.pos[0])));
+            assert!((lo - x(w[0] - 2)).abs() < 1e-12 && (hi - x(w[1] + 2)).abs() < 1e-12, "{w:?}: {lo} {hi}");
+            assert_eq!(slice.domain, whole.domain);
+            parts.extend(slice.particles);
+        }
+        let mut a = whole.particles.clone();
+        a.sort_by_key(key);
+        parts.sort_by_key(key);
+        assert!(a == parts, "the slices hold {} particles, the whole bed {}", parts.len(), a.len());
+        // A window outside the container is refused.
+        assert!(build_terrain_in(&c, 0.01, 3, g, &regions, &[dp()], Some([5, nx + 1])).is_err());
+        assert!(build_terrain_in(&c, 0.01, 3, g, &regions, &[dp()], Some([5, 5])).is_err());
     }
 
     #[test]

@@ -10,7 +10,7 @@ mod generate;
 mod heightmap;
 mod shapes;
 
-pub use generate::{Lattice, RegionSpec, TerrainBuild, build_terrain};
+pub use generate::{Lattice, RegionSpec, TerrainBuild, build_terrain, build_terrain_in};
 pub use heightmap::Heightmap;
 pub use shapes::{Aabb, SoilRegion, Surface};
 

@@ -77,6 +77,8 @@ pub struct CpuSph<T: Real> {
     material: Vec<u16>,
     mass: Vec<T>,
     id: Vec<u32>,
+    /// The id the next particle laid by [`CpuSph::relay`] gets.
+    next_id: u32,
     free_surface: Vec<bool>,
     detached: Vec<bool>,
     active: usize,
@@ -274,6 +276,7 @@ impl<T: Real> CpuSph<T> {
             material: particles.iter().map(|p| p.material).collect(),
             mass: particles.iter().map(|p| T::of(p.mass)).collect(),
             id: (0..n as u32).collect(),
+            next_id: n as u32,
             free_surface: vec![false; n],
             detached: vec![false; n],
             active: n,
@@ -628,6 +631,131 @@ impl<T: Real> CpuSph<T> {
             }
         }
         p
+    }
+
+    /// Moves a patch of the bed forward along x: lifts every soil particle inside the domain
+    /// with `x < cut`, lays `fresh` in their place (ids counting on from the highest so far,
+    /// at rest unless `fresh` says otherwise) and shifts the fixed walls by `shift` along x.
+    /// Escaped particles behind the cut are lifted too; those ahead stay escaped. The next
+    /// step sorts, lists and classifies afresh. Returns how many particles were lifted.
+    pub fn relay(&mut self, cut: f64, shift: f64, fresh: &[ParticleInit]) -> Result<usize, SolverError> {
+        if self.wet.is_some() {
+            return Err(SolverError::Setup("a moving patch does not carry water yet".into()));
+        }
+        if let Some(p) =
+            fresh.iter().find(|p| p.material as usize >= self.materials.len() || !(p.rho > 0.0 && p.mass > 0.0))
+        {
+            return Err(SolverError::Setup(format!(
+                "particle laid at {:?} has material {} (of {}), density {} and mass {}",
+                p.pos,
+                p.material,
+                self.materials.len(),
+                p.rho,
+                p.mass
+            )));
+        }
+        let (active, cut) = (self.active, T::of(cut));
+        let kept: Vec<usize> = (0..active).filter(|&i| self.pos[i].x >= cut).collect();
+        // Escaped particles behind the cut go too (thrown over the back wall: they are gone
+        // with the soil they left); those ahead stay escaped.
+        let escaped: Vec<usize> = (active..self.pos.len()).filter(|&i| self.pos[i].x >= cut).collect();
+        let lifted = self.pos.len() - kept.len() - escaped.len();
+        if self.next_id as usize + fresh.len() >= u32::MAX as usize {
+            return Err(SolverError::Setup("too many particles laid by the moving patch (ids exhausted)".into()));
+        }
+        // Kept (in their order) | fresh | escaped.
+        let f = fresh.iter();
+        self.pos = relaid(&self.pos, (&kept, &escaped), f.clone().map(|p| Vec3::of(p.pos)));
+        self.vel = relaid(&self.vel, (&kept, &escaped), f.clone().map(|p| Vec3::of(p.vel)));
+        self.rho = relaid(&self.rho, (&kept, &escaped), f.clone().map(|p| T::of(p.rho)));
+        self.sigma = relaid(&self.sigma, (&kept, &escaped), f.clone().map(|p| Sym3::of(p.sigma)));
+        self.state = relaid(
+            &self.state,
+            (&kept, &escaped),
+            f.clone().map(|p| PointState { pc: T::of(p.pc), v: T::of(p.specific_volume) }),
+        );
+        self.material = relaid(&self.material, (&kept, &escaped), f.clone().map(|p| p.material));
+        self.mass = relaid(&self.mass, (&kept, &escaped), f.clone().map(|p| T::of(p.mass)));
+        let first = self.next_id;
+        self.id = relaid(&self.id, (&kept, &escaped), (first..).take(fresh.len()));
+        self.next_id = first + fresh.len() as u32;
+        self.free_surface = relaid(&self.free_surface, (&kept, &escaped), f.clone().map(|_| false));
+        self.detached = relaid(&self.detached, (&kept, &escaped), f.map(|_| false));
+        let n = self.pos.len();
+        self.s_pos.resize(n, Vec3::zero());
+        self.s_vel.resize(n, Vec3::zero());
+        self.s_rho.resize(n, T::zero());
+        self.s_sigma.resize(n, Sym3::zero());
+        self.s_state.resize(n, PointState::default());
+        self.packed.resize(n, Packed::default());
+        self.moduli.resize(n, Moduli { bulk: T::zero(), shear: T::zero() });
+        self.rates.resize(n, Rate::default());
+        self.active = kept.len() + fresh.len();
+        self.awake = self.active;
+        self.near = self.active;
+        // Shift the walls; the whole order changed: sort, list and classify again.
+        let dx = T::of(shift);
+        for &o in &self.wall_ids {
+            let m = &mut self.m_pos[o as usize];
+            m.x += dx;
+        }
+        self.walls_sorted = false;
+        self.markers_dirty = true;
+        self.boxes_classified = None;
+        self.lists_valid = false;
+        self.x_ref.clear();
+        Ok(lifted)
+    }
+
+    /// Bytes held by the particle, marker and neighbour-list arrays (their capacities): what
+    /// the solver's memory follows.
+    pub fn heap_bytes(&self) -> usize {
+        fn b<V>(v: &[V], cap: usize) -> usize {
+            let _ = v;
+            cap * size_of::<V>()
+        }
+        macro_rules! sum {
+            ($($v:expr),* $(,)?) => { 0 $(+ b(&$v, $v.capacity()))* };
+        }
+        sum!(
+            self.pos,
+            self.vel,
+            self.rho,
+            self.sigma,
+            self.state,
+            self.material,
+            self.mass,
+            self.id,
+            self.free_surface,
+            self.detached,
+            self.s_pos,
+            self.s_vel,
+            self.s_rho,
+            self.s_sigma,
+            self.s_state,
+            self.packed,
+            self.moduli,
+            self.rates,
+            self.m_pos,
+            self.m_vel,
+            self.m_acc,
+            self.m_owner,
+            self.m_force,
+            self.ms_pos,
+            self.ms_vel,
+            self.ms_acc,
+            self.touched,
+            self.m_packed,
+            self.ms_force,
+            self.ms_orig,
+            self.x_ref,
+            self.nl_ss.offsets,
+            self.nl_ss.indices,
+            self.nl_sm.offsets,
+            self.nl_sm.indices,
+            self.nl_ms.offsets,
+            self.nl_ms.indices,
+        )
     }
 
     /// Reorders every per-particle array over `lo..lo + order.len()`: the particle at
@@ -1392,6 +1520,16 @@ impl<T: Real> CpuSph<T> {
 #[inline(always)]
 fn density_floor<T: Real>(mat: &Material<T>, floor: T) -> T {
     if mat.is_water() { mat.density * floor * T::of(crate::rheology::MIN_POROSITY) } else { mat.density * floor }
+}
+
+/// The entries of `v` at `kept`, then `fresh`, then those at `escaped` (see
+/// [`CpuSph::relay`]).
+fn relaid<V: Copy>(v: &[V], (kept, escaped): (&[usize], &[usize]), fresh: impl Iterator<Item = V>) -> Vec<V> {
+    let mut out = Vec::with_capacity(kept.len() + escaped.len() + fresh.size_hint().0);
+    out.extend(kept.iter().map(|&i| v[i]));
+    out.extend(fresh);
+    out.extend(escaped.iter().map(|&i| v[i]));
+    out
 }
 
 /// `Σ d0³ W(|x|)` over the points of a cubic lattice of spacing d0 (the particles' starting
