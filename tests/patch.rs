@@ -4,6 +4,7 @@
 //! same soil it would meet on the whole bed.
 
 use crate::common;
+use regolith::run::{RunOptions, run_scene};
 use regolith::sim::Simulation;
 
 /// A bed `length` m long, 0.2 m wide and 0.12 m deep (d0 = `d0`), Drucker–Prager sand
@@ -148,6 +149,20 @@ fn the_wheel_meets_the_same_soil_on_a_patch_as_on_the_whole_bed() {
     assert!(rel[0].abs() < 0.03 && rel[1].abs() < 0.03, "patch against whole bed: {rel:?}");
 }
 
+/// `summary.json` says where the patch ended and how much soil it moved.
+#[test]
+fn a_run_reports_the_patch_in_its_summary() {
+    let text = wheel_bed_at(3.0, 0.04, (1.0, 0.1, 0.01), 0.6, "patch = { length = 1.0, trigger = 0.3 }");
+    let out = common::out_dir("patch_summary");
+    let s = run_scene(&common::scene(&text), &RunOptions::quiet(&out)).expect("runs");
+    let p = s.patch.expect("the summary reports the patch");
+    eprintln!("{p:?}");
+    assert_eq!((p.length, p.trigger), (1.0, 0.3));
+    assert!(p.advances >= 1 && p.laid > 0 && p.lifted > 0, "{p:?}");
+    // The wheel's front reached about x = 1 m: the patch keeps 0.3 m + 2h of soil ahead.
+    assert!(p.span_final[1] > 1.2 && (p.span_final[1] - p.span_final[0] - 1.0).abs() < 1e-9, "{p:?}");
+}
+
 /// Wrong patch settings are one-line errors naming the key.
 #[test]
 fn patch_settings_are_checked() {
@@ -158,6 +173,8 @@ fn patch_settings_are_checked() {
         ("patch = { length = 0.3, trigger = 0.2 }", "terrain.patch.length"),
         ("patch = { length = 2.5, trigger = 0.2 }", "terrain.patch.length"),
         ("patch = { length = 0.9, trigger = 0.2, speed = 1 }", "speed"),
+        // The wheel (x = 0.3 m, R = 0.1 m) must start inside the patch.
+        ("patch = { length = 0.38, trigger = 0.19 }", "terrain.patch.length"),
     ] {
         let err = regolith::scene::load_scene_source(std::path::Path::new("p.toml"), &text(patch), &[])
             .expect_err(patch)
@@ -169,7 +186,7 @@ fn patch_settings_are_checked() {
     let plan = regolith::scene::describe(&scene);
     assert!(plan.contains("moving patch: 0.9 m of the 2 m bed"), "{plan}");
     // A patch too short for the body stops the run with an error naming the key.
-    let scene = common::scene(&text("patch = { length = 0.4, trigger = 0.2 }"));
+    let scene = common::scene(&text("patch = { length = 0.45, trigger = 0.2 }"));
     let mut sim = Simulation::<f32>::new(&scene).expect("builds");
     let err = (0..2000).find_map(|_| sim.step().err()).expect("the patch cannot keep 0.2 m ahead");
     assert!(err.to_string().contains("terrain.patch.length"), "{err}");

@@ -105,7 +105,8 @@ impl Patch {
         self.spec
     }
 
-    /// The soil and walls of the current window, as the generator gives them.
+    /// The soil and walls of a window (the lattice columns of its end walls), as the
+    /// generator gives them.
     pub(crate) fn generate(&self, window: [i64; 2]) -> Result<regolith_terrain::TerrainBuild, TerrainError> {
         build_terrain_in(
             &self.container,

@@ -187,6 +187,17 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
             }),
             _ => None,
         },
+        patch: sim.as_ref().and_then(|s| s.patch()).map(|p| {
+            let (advances, lifted, laid) = p.counts();
+            summary::PatchSummary {
+                length: p.spec().length,
+                trigger: p.spec().trigger,
+                span_final: p.span(),
+                advances,
+                lifted,
+                laid,
+            }
+        }),
         nan_detected: matches!(
             &failure,
             Some(RunError::Failed { cause: regolith_fsi::SolverError::NonFinite { .. }, .. })

@@ -108,7 +108,9 @@ pub struct Summary {
     pub max_speed: f64,
     /// Largest particle speed during the run (m/s).
     pub max_speed_run: f64,
-    /// Soil mass at the start (kg).
+    /// Soil mass at the start (kg): the total held at the end, escaped particles included, which
+    /// is the start's unless a moving patch lifted and laid soil or the first step set the
+    /// water's masses (wet scenes).
     pub mass_initial: f64,
     /// Soil mass still in the domain at the end (kg).
     pub mass_final: f64,
@@ -120,6 +122,8 @@ pub struct Summary {
     pub rarefied_max: usize,
     /// The active region, when the scene keeps one (`[sph.active]`).
     pub active_domain: Option<ActiveSummary>,
+    /// The moving patch, when the scene has one (`[terrain] patch`).
+    pub patch: Option<PatchSummary>,
     /// True when the run stopped on a non-finite value.
     pub nan_detected: bool,
     /// The error that stopped the run, if any.
@@ -156,6 +160,23 @@ pub struct ActiveSummary {
     pub inside_final: usize,
     /// Classifications made.
     pub classifications: u64,
+}
+
+/// Where a moving patch went and how much soil it moved.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct PatchSummary {
+    /// Length held (m).
+    pub length: f64,
+    /// Soil kept ahead of the foremost FSI body (m).
+    pub trigger: f64,
+    /// x of its back and front end walls at the end (m).
+    pub span_final: [f64; 2],
+    /// Times it advanced.
+    pub advances: u64,
+    /// Particles lifted behind it, in all.
+    pub lifted: u64,
+    /// Particles laid ahead of it, in all.
+    pub laid: u64,
 }
 
 /// The radius within which 99 % of the particles lie, about an axis, plus half a spacing

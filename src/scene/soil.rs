@@ -331,5 +331,18 @@ pub(super) fn resolve_patch(
     if !bodies.iter().any(|b| b.fsi) {
         return Err(e("terrain.patch", "follows the scene's FSI bodies, and the scene has none".into()));
     }
+    // The patch starts at the container's low-x end: a body starting beyond it would have no
+    // soil under it until the first advance.
+    let end = c.min[0] + length;
+    if let Some(b) = bodies.iter().find(|b| b.fsi && b.desc.pose.translation[0] + b.desc.shape.bounding_radius() > end)
+    {
+        return Err(e(
+            "terrain.patch.length",
+            format!(
+                "{} starts at x = {} m, beyond the patch's start, which holds x = {}..{end} m: place the FSI bodies within it or lengthen it",
+                b.key, b.desc.pose.translation[0], c.min[0]
+            ),
+        ));
+    }
     Ok(Some(PatchSpec { length, trigger }))
 }
