@@ -229,19 +229,9 @@ pub fn wheel_long_scene(length: f64, active: bool, patch: Option<f64>) -> Result
     load_scene_source(Path::new("<bench wheel-long>"), &text, &[])
 }
 
-/// One wheel-long bench run.
+/// The timed part of a run made of exchanges (wheel-long, rover-patch).
 #[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct WheelBenchResult {
-    /// Active region on.
-    pub active: bool,
-    /// Moving patch length (m), if one.
-    pub patch: Option<f64>,
-    /// Soil particles in the bed.
-    pub particles: usize,
-    /// Wall and wheel markers.
-    pub markers: usize,
-    /// Mean particles integrated per step.
-    pub awake_mean: f64,
+pub struct Timed {
     /// Soil steps timed.
     pub steps: u64,
     /// Exchanges timed.
@@ -256,6 +246,39 @@ pub struct WheelBenchResult {
     pub sim_s_per_wall_s: f64,
     /// Integrated particles × steps / s.
     pub particle_steps_per_s: f64,
+}
+
+impl Timed {
+    /// From the counts: `particle_steps` is the sum over steps of the particles integrated.
+    fn of(exchanges: u64, steps: u64, simulated: f64, seconds: f64, particle_steps: f64) -> Self {
+        Self {
+            steps,
+            exchanges,
+            dt_mean: simulated / steps.max(1) as f64,
+            simulated_s: simulated,
+            seconds,
+            sim_s_per_wall_s: simulated / seconds,
+            particle_steps_per_s: particle_steps / seconds,
+        }
+    }
+}
+
+/// One wheel-long bench run.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct WheelBenchResult {
+    /// Active region on.
+    pub active: bool,
+    /// Moving patch length (m), if one.
+    pub patch: Option<f64>,
+    /// Soil particles in the bed.
+    pub particles: usize,
+    /// Wall and wheel markers.
+    pub markers: usize,
+    /// Mean particles integrated per step.
+    pub awake_mean: f64,
+    /// Exchanges, steps and time of the timed part.
+    #[serde(flatten)]
+    pub timed: Timed,
     /// Mean soil force on the wheel over the timed exchanges (N, world x and z).
     pub force_xz: [f64; 2],
     /// Classifications of the active region during the timed exchanges.
@@ -302,18 +325,132 @@ pub fn run_wheel_long(scene: &Scene, warmup: u64, exchanges: u64) -> Result<Whee
         particles: f.len(),
         markers: f.marker_positions().len(),
         awake_mean: awake_steps / steps.max(1) as f64,
-        steps,
-        exchanges,
-        dt_mean: simulated / steps.max(1) as f64,
-        simulated_s: simulated,
-        seconds,
-        sim_s_per_wall_s: simulated / seconds,
-        particle_steps_per_s: awake_steps / seconds,
+        timed: Timed::of(exchanges, steps, simulated, seconds, awake_steps),
         force_xz: [fx / exchanges as f64, fz / exchanges as f64],
         classifications: f.classifications() - c0,
         threads: rayon::current_num_threads(),
         neighbor_skin: scene.solver.neighbor_skin,
         list_builds: f.as_cpu().map_or(steps, |c| c.list_builds() - builds0),
         stage_retries: f.as_cpu().map_or(0, |c| c.stage_retries() - retries0),
+    })
+}
+
+/// Where the example rover's description lies, from the repository root.
+const ROVER_URDF: &str = "examples/rover_description/urdf/rover.urdf";
+
+/// The example rover's URDF: under the current directory (a run from the repository root),
+/// else under the source tree this binary was built from.
+pub fn rover_urdf() -> Result<std::path::PathBuf, InputError> {
+    let here = std::env::current_dir().map(|d| d.join(ROVER_URDF)).ok();
+    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join(ROVER_URDF);
+    here.into_iter().chain([built]).find(|p| p.is_file()).ok_or_else(|| {
+        InputError::flag(
+            "--scene",
+            format!("rover-patch needs the example rover {ROVER_URDF}: run from the repository root"),
+        )
+    })
+}
+
+/// `regolith bench --scene rover-patch`: the example rover (examples/scenes/rover.toml: the
+/// four-wheeled URDF rover, 8.5 kg, wheels R = 0.07 m with 10 grousers of 8 mm, on the loose
+/// MCC soil of that scene, d0 = 2 cm, a bed 0.7 m wide and 0.1 m deep) driving straight ahead
+/// along a bed `length` m long: the wheels spin up to 3 rad/s over the first 0.1 s. With
+/// `patch = Some(l)` the soil is a moving patch of `l` m that keeps `trigger` = 1 m ahead of
+/// the front wheels. The rover starts with its front wheels just behind that point, so the
+/// patch advances as soon as it moves. Both runs start the rover at the same place.
+pub fn rover_patch_scene(length: f64, patch_length: f64, patch: bool, urdf: &Path) -> Result<Scene, InputError> {
+    if !(length.is_finite() && (3.0..=100.0).contains(&length)) {
+        return Err(InputError::flag("--length", format!("must be in [3, 100] m (got {length})")));
+    }
+    if !(patch_length.is_finite() && patch_length >= 2.0 && patch_length < length) {
+        return Err(InputError::flag(
+            "--patch",
+            format!(
+                "must be at least 2 m (the rover, 1 m ahead of it and the support behind) and shorter than --length {length} m (got {patch_length})"
+            ),
+        ));
+    }
+    let trigger = 1.0;
+    // The wheels' centres are 0.15 m ahead of and behind the chassis origin; their grousers
+    // reach 0.078 m from the axle.
+    let x0 = patch_length - trigger - 0.15 - 0.078 - 0.02;
+    let package = urdf.parent().and_then(Path::parent).and_then(Path::parent).unwrap_or(Path::new("."));
+    let quote = |p: &Path| toml::Value::String(p.display().to_string()).to_string();
+    let drive = "[[0.0, 0.0], [0.1, 3.0]]";
+    let text = format!(
+        "[simulation]\nend_time = 10000.0\nprecision = \"f32\"\nexchange_interval = 0.001\n\n\
+         [sph]\nspacing = 0.02\n\n\
+         [[materials]]\nname = \"loose soil\"\nmodel = \"mcc\"\ndensity = 1600\nyoungs_modulus = 5e6\npoisson_ratio = 0.3\n\
+         mcc_m = 1.2\nmcc_kappa = 0.02\nmcc_lambda = 0.1\nmcc_v_lambda = 2.2\nocr = 2.0\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [{length}, 0.7, 0.3]\n\n\
+         [terrain]\nmaterial = \"loose soil\"\ndepth = 0.1\n{patch}\n\
+         [[vehicles]]\nname = \"rover\"\nurdf = {urdf}\npackage_path = [{package}]\nposition = [{x0}, 0.35]\n\
+         grousers = {{ count = 10, height = 0.008, thickness = 0.006 }}\n\
+         drive = {{ left = {drive}, right = {drive}, max_torque = 6.0 }}\n",
+        patch =
+            if patch { format!("patch = {{ length = {patch_length}, trigger = {trigger} }}\n") } else { String::new() },
+        urdf = quote(urdf),
+        package = quote(package),
+    );
+    load_scene_source(Path::new("<bench rover-patch>"), &text, &[])
+}
+
+/// One rover-patch bench run.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct RoverBenchResult {
+    /// Bed length (m).
+    pub length: f64,
+    /// Moving patch length (m), if one.
+    pub patch: Option<f64>,
+    /// Soil particles at the start and the end of the timed exchanges.
+    pub particles: [usize; 2],
+    /// Wall and wheel markers.
+    pub markers: usize,
+    /// Bytes of the solver's particle, marker and list arrays at the start and the end of the
+    /// timed exchanges.
+    pub solver_bytes: [usize; 2],
+    /// Exchanges, steps and time of the timed part.
+    #[serde(flatten)]
+    pub timed: Timed,
+    /// The chassis' x at the start and the end of the timed exchanges (m).
+    pub chassis_x: [f64; 2],
+    /// Times the patch advanced during the timed exchanges.
+    pub advances: u64,
+    /// Rayon threads.
+    pub threads: usize,
+}
+
+/// Runs the rover-patch bench: `warmup` untimed exchanges (1 ms each), then `exchanges` timed.
+pub fn run_rover(scene: &Scene, warmup: u64, exchanges: u64) -> Result<RoverBenchResult, RunError> {
+    let mut sim = crate::sim::Simulation::<f32>::new(scene)?;
+    let chassis = sim.body("rover/base_link").ok_or_else(|| {
+        RunError::Solver(regolith_fsi::SolverError::Setup("the rover-patch scene has no link rover/base_link".into()))
+    })?;
+    for _ in 0..warmup {
+        sim.step()?;
+    }
+    let advances = |s: &crate::sim::Simulation<f32>| s.patch().map_or(0, |p| p.counts().0);
+    let bytes = |s: &crate::sim::Simulation<f32>| s.system.fluid.as_cpu().map_or(0, |c| c.heap_bytes());
+    let (n0, b0, a0, x0) = (sim.system.fluid.len(), bytes(&sim), advances(&sim), sim.body_state(chassis).origin[0]);
+    let (mut steps, mut particle_steps) = (0u64, 0.0);
+    let t0 = sim.time();
+    let start = Instant::now();
+    for _ in 0..exchanges {
+        let r = sim.step()?;
+        steps += u64::from(r.fluid_steps);
+        particle_steps += sim.system.fluid.len() as f64 * f64::from(r.fluid_steps);
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let simulated = sim.time() - t0;
+    Ok(RoverBenchResult {
+        length: scene.container.as_ref().map_or(0.0, |c| c.max[0] - c.min[0]),
+        patch: scene.patch.map(|p| p.length),
+        particles: [n0, sim.system.fluid.len()],
+        markers: sim.system.fluid.marker_positions().len(),
+        solver_bytes: [b0, bytes(&sim)],
+        timed: Timed::of(exchanges, steps, simulated, seconds, particle_steps),
+        chassis_x: [x0, sim.body_state(chassis).origin[0]],
+        advances: advances(&sim) - a0,
+        threads: rayon::current_num_threads(),
     })
 }

@@ -379,6 +379,44 @@ fn bench_flags_that_do_not_apply_to_the_scene_are_one_line_errors() {
     assert_one_line_error(&["bench", "--scene", "wheel-long", "--model", "dp"], "--model");
     assert_one_line_error(&["bench", "--scene", "column", "--active", "on"], "--active");
     assert_one_line_error(&["bench", "--particles", "10"], "--particles");
+    assert_one_line_error(&["bench", "--scene", "rover-patch", "--active", "on"], "--active");
+    assert_one_line_error(&["bench", "--scene", "rover-patch", "--skin", "0"], "--skin");
+    assert_one_line_error(&["bench", "--scene", "rover-patch", "--patch", "1.5"], "--patch: must be at least 2 m");
+    assert_one_line_error(
+        &["bench", "--scene", "rover-patch", "--length", "4", "--patch", "4"],
+        "shorter than --length",
+    );
+    assert_one_line_error(
+        &["bench", "--scene", "column", "--patch", "3"],
+        "applies to --scene wheel-long or rover-patch",
+    );
+}
+
+/// The rover-patch bench runs the example rover on the whole bed and on a patch, in one run:
+/// the patch holds the particles, markers and memory of its own length, not the bed's (two
+/// timed exchanges each: the figures belong in BENCHMARKS.md).
+#[test]
+fn the_rover_patch_bench_holds_the_patch_not_the_bed() {
+    let json = std::env::temp_dir().join(format!("regolith-rover-bench-{}.json", std::process::id()));
+    let j = json.to_string_lossy().to_string();
+    let args = ["bench", "--scene", "rover-patch", "--length", "4", "--patch", "2", "--steps", "2", "--warmup", "0"];
+    let (code, stdout, err) = regolith(&[&args[..], &["--json", &j]].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("bench rover-patch: patch 2 m against the whole 4 m bed: speed-up"), "{stdout}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("json")).expect("parse");
+    let _ = std::fs::remove_file(&json);
+    let (whole, patch) = (&v[0], &v[1]);
+    assert!(whole["patch"].is_null() && patch["patch"] == 2.0, "{v}");
+    let n = |r: &serde_json::Value, k: &str| r[k][1].as_f64().expect(k);
+    // The soil and the floor and side walls scale with the length along x (2 m of 4 m); the
+    // rover's markers and the end walls do not.
+    for k in ["particles", "solver_bytes"] {
+        let ratio = n(patch, k) / n(whole, k);
+        assert!(ratio > 0.45 && ratio < 0.6, "{k}: patch/whole = {ratio}");
+    }
+    assert!(patch["markers"].as_f64() < whole["markers"].as_f64(), "{v}");
+    // Both start the rover at the same place.
+    assert_eq!(whole["chassis_x"][0], patch["chassis_x"][0]);
 }
 
 /// The column bench builds its 67 626-particle column and reports dt and the simulated time

@@ -5,7 +5,10 @@ use std::path::Path;
 use anyhow::Context;
 
 use super::{ActiveArg, BackendArg, BenchModelArg, Failure, Precision};
-use crate::bench::{BenchModel, bench_scene, column_scene, run_bench, run_wheel_long, wheel_long_scene};
+use crate::bench::{
+    BenchModel, RoverBenchResult, bench_scene, column_scene, rover_patch_scene, rover_urdf, run_bench, run_rover,
+    run_wheel_long, wheel_long_scene,
+};
 use crate::input::InputError;
 use crate::scene;
 
@@ -148,15 +151,15 @@ pub(super) fn wheel_long(
             r.particles,
             r.awake_mean,
             r.markers,
-            r.exchanges,
-            r.steps,
-            r.dt_mean,
+            r.timed.exchanges,
+            r.timed.steps,
+            r.timed.dt_mean,
             r.list_builds,
             r.stage_retries,
-            r.seconds,
+            r.timed.seconds,
             r.classifications,
-            r.sim_s_per_wall_s,
-            r.particle_steps_per_s,
+            r.timed.sim_s_per_wall_s,
+            r.timed.particle_steps_per_s,
             r.force_xz[0],
             r.force_xz[1],
             r.threads
@@ -173,11 +176,63 @@ pub(super) fn wheel_long(
                 r.neighbor_skin,
                 if base.active { "on" } else { "off" },
                 base.neighbor_skin,
-                r.sim_s_per_wall_s / base.sim_s_per_wall_s,
+                r.timed.sim_s_per_wall_s / base.timed.sim_s_per_wall_s,
                 100.0 * (r.force_xz[0] - base.force_xz[0]) / base.force_xz[0].abs(),
                 100.0 * (r.force_xz[1] - base.force_xz[1]) / base.force_xz[1].abs()
             );
         }
+    }
+    if let Some(p) = json {
+        crate::output::write_json(p, &results).context("writing bench json")?;
+    }
+    Ok(())
+}
+
+/// `regolith bench --scene rover-patch`: timed exchanges of the example rover on the whole bed
+/// and on a moving patch, and their ratio; `steps` and `warmup` count exchanges (1 ms each).
+pub(super) fn rover_patch(
+    length: f64,
+    patch: f64,
+    steps: u64,
+    warmup: u64,
+    json: Option<&Path>,
+) -> Result<(), Failure> {
+    if steps == 0 {
+        return Err(InputError::flag("--steps", "must be at least 1").into());
+    }
+    let urdf = rover_urdf()?;
+    let mut results: Vec<RoverBenchResult> = Vec::new();
+    for on in [false, true] {
+        let scene = rover_patch_scene(length, patch, on, &urdf)?;
+        let r = run_rover(&scene, warmup, steps).context("bench run failed")?;
+        println!(
+            "bench rover-patch {}: {} → {} particles, {} markers, solver arrays {:.1} → {:.1} MB; {} exchanges, {} steps (dt {:.3e} s) in {:.2} s: {:.3e} simulated s per wall s, {:.3e} particle-steps/s; chassis x {:.3} → {:.3} m, {} advances ({} threads)",
+            r.patch.map_or(format!("whole {length} m bed"), |l| format!("patch {l} m of {length} m")),
+            r.particles[0],
+            r.particles[1],
+            r.markers,
+            1e-6 * r.solver_bytes[0] as f64,
+            1e-6 * r.solver_bytes[1] as f64,
+            r.timed.exchanges,
+            r.timed.steps,
+            r.timed.dt_mean,
+            r.timed.seconds,
+            r.timed.sim_s_per_wall_s,
+            r.timed.particle_steps_per_s,
+            r.chassis_x[0],
+            r.chassis_x[1],
+            r.advances,
+            r.threads
+        );
+        results.push(r);
+    }
+    if let [whole, on_patch] = &results[..] {
+        println!(
+            "bench rover-patch: patch {patch} m against the whole {length} m bed: speed-up {:.2}x (simulated s per wall s), particles {:.2}x fewer, solver memory {:.2}x less",
+            on_patch.timed.sim_s_per_wall_s / whole.timed.sim_s_per_wall_s,
+            whole.particles[1] as f64 / on_patch.particles[1] as f64,
+            whole.solver_bytes[1] as f64 / on_patch.solver_bytes[1].max(1) as f64,
+        );
     }
     if let Some(p) = json {
         crate::output::write_json(p, &results).context("writing bench json")?;

@@ -82,6 +82,8 @@ pub enum BenchSceneArg {
     Column,
     /// A grousered wheel at 30 % slip crossing a long bed.
     WheelLong,
+    /// The example rover driving along a long bed, on a moving patch against the whole bed.
+    RoverPatch,
 }
 
 /// Active region of the wheel-long bench.
@@ -656,11 +658,12 @@ pub enum Command {
         /// wheel-long only: run with the active region on, off, or both (the ratio in one run).
         #[arg(long, value_enum)]
         active: Option<ActiveArg>,
-        /// wheel-long only: bed length (m).
+        /// wheel-long and rover-patch only: bed length (m; default 10 and 20).
         #[arg(long, value_name = "M")]
         length: Option<f64>,
-        /// wheel-long only: also time the wheel on a moving patch of this length (m) with the
-        /// active region off, against the whole bed.
+        /// wheel-long: also time the wheel on a moving patch of this length (m) with the
+        /// active region off, against the whole bed; rover-patch: the patch's length (default
+        /// 3 m).
         #[arg(long, value_name = "M")]
         patch: Option<f64>,
         /// Verlet skins of the neighbour lists to time, multiples of h, comma-separated (e.g.
@@ -680,12 +683,14 @@ pub enum Command {
         /// Precision.
         #[arg(long, value_enum, default_value_t = Precision::F32)]
         precision: Precision,
-        /// Timed steps.
-        #[arg(long, value_name = "N", default_value_t = 40)]
-        steps: u64,
-        /// Untimed warm-up steps.
-        #[arg(long, value_name = "N", default_value_t = 5)]
-        warmup: u64,
+        /// Timed steps (exchanges of 1 ms for wheel-long and rover-patch); default 40, rover-patch
+        /// 200.
+        #[arg(long, value_name = "N")]
+        steps: Option<u64>,
+        /// Untimed warm-up steps (exchanges for wheel-long and rover-patch); default 5,
+        /// rover-patch 150 (the rover settles and its wheels spin up).
+        #[arg(long, value_name = "N")]
+        warmup: Option<u64>,
         /// Also write the results as JSON to this file.
         #[arg(long, value_name = "FILE")]
         json: Option<PathBuf>,
@@ -751,8 +756,35 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             length.unwrap_or(10.0),
             patch,
             &skin,
-            steps,
-            warmup,
+            steps.unwrap_or(40),
+            warmup.unwrap_or(5),
+            json.as_deref(),
+        ),
+        Command::Bench { scene: BenchSceneArg::RoverPatch, particles, model, active, skin, .. }
+            if particles.is_some() || model.is_some() || active.is_some() || !skin.is_empty() =>
+        {
+            Err(InputError::flag(
+                if particles.is_some() {
+                    "--particles"
+                } else if model.is_some() {
+                    "--model"
+                } else if active.is_some() {
+                    "--active"
+                } else {
+                    "--skin"
+                },
+                "does not apply to --scene rover-patch (its flags: --length, --patch, --steps, --warmup, --json)"
+                    .to_string(),
+            )
+            .into())
+        }
+        Command::Bench {
+            scene: BenchSceneArg::RoverPatch, length, patch, steps, warmup, json, carve: false, ..
+        } => bench::rover_patch(
+            length.unwrap_or(20.0),
+            patch.unwrap_or(3.0),
+            steps.unwrap_or(200),
+            warmup.unwrap_or(150),
             json.as_deref(),
         ),
         Command::Bench { active, length, patch, .. } if active.is_some() || length.is_some() || patch.is_some() => {
@@ -764,7 +796,12 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 } else {
                     "--patch"
                 },
-                "applies to --scene wheel-long only".to_string(),
+                if active.is_some() {
+                    "applies to --scene wheel-long only"
+                } else {
+                    "applies to --scene wheel-long or rover-patch only"
+                }
+                .to_string(),
             )
             .into())
         }
@@ -794,8 +831,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             backend,
             precision,
             &skin,
-            steps,
-            warmup,
+            steps.unwrap_or(40),
+            warmup.unwrap_or(5),
             json.as_deref(),
         ),
         Command::Run { scene, out, backend, precision, sets, slips, quiet } => {
