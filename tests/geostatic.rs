@@ -182,3 +182,99 @@ fn a_pressurised_block_in_a_closed_box_stays_at_its_pressure_with_its_ocr() {
     // (2026-12-03): 0.30 % and 1.1e-3 m/s, the lid's edges being the largest disturbance.
     assert!(worst < 0.01 && max_speed < 2.5e-3, "p off by {worst:.3e}, speed {max_speed:.3e}");
 }
+
+/// A dry elastic layer `h` m deep (E_oed = 0.1 MPa, ν = 0.3, ρ = 1600 kg/m³, spacing `d0`, a
+/// 0.05 m box with smooth walls) that starts without stress, run to `end` s.
+fn stress_free_layer(h: f64, d0: f64, end: f64) -> String {
+    format!(
+        "[simulation]\nend_time = {end}\nprecision = \"f64\"\n\n[sph]\nspacing = {d0}\n\n\
+         [[materials]]\nname = \"silt\"\nmodel = \"elastic\"\ndensity = 1600\nyoungs_modulus = {e}\npoisson_ratio = 0.3\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.05, 0.05, {top}]\nsoil_contact = \"smooth\"\n\n\
+         [[soil_blocks]]\nmaterial = \"silt\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.05, 0.05, {h}]\n\
+         initial_pressure = 1.0\n",
+        // E_oed = E (1 − ν) / ((1 + ν)(1 − 2ν)) = 0.1 MPa.
+        e = 1e5 * 1.3 * 0.4 / 0.7,
+        top = 1.5 * h,
+    )
+}
+
+/// The settlement of the layer's top row of particles (followed by id) at every step.
+fn settlement_history(h: f64, d0: f64, end: f64) -> Vec<(f64, f64)> {
+    let scene = common::scene(&stress_free_layer(h, d0, end));
+    let mut m = build_soil::<f64>(&scene).expect("builds");
+    let ids: std::collections::HashSet<u32> = {
+        let s = m.solver.as_cpu().expect("cpu");
+        (0..s.active()).filter(|&i| s.positions()[i].as_f64()[2] > h - 0.5 * d0).map(|i| s.ids()[i]).collect()
+    };
+    let mean_z = |s: &regolith::fsi::cpu::CpuSph<f64>| -> f64 {
+        let z: Vec<f64> =
+            (0..s.active()).filter(|&i| ids.contains(&s.ids()[i])).map(|i| s.positions()[i].as_f64()[2]).collect();
+        z.iter().sum::<f64>() / z.len() as f64
+    };
+    let z0 = mean_z(m.solver.as_cpu().expect("cpu"));
+    let mut out = vec![(0.0, 0.0)];
+    while m.solver.time() < end - 1e-12 {
+        m.solver.step(Some(end - m.solver.time())).expect("step");
+        out.push((m.solver.time(), z0 - mean_z(m.solver.as_cpu().expect("cpu"))));
+    }
+    out
+}
+
+/// A layer that starts without stress under gravity is a step load: until the compression
+/// wave from the floor reaches it the top falls freely, then the layer rings about its static
+/// state. Closed form (1-D elastic wave, fixed base, free top): the static settlement
+/// `γ h² / (2 E_oed)` (0.785 mm), an oscillation between none and twice that, with period
+/// `4 h / c`, `c = sqrt(E_oed / ρ)` (50.6 ms). Checked over the first three periods, at
+/// d0 = 1 cm and 5 mm: the Hann-windowed mean settlement within 8 % (measured +3.6 % and
+/// +5.4 %), the period from the upward crossings of the static level within 10 % (+6.8 %,
+/// +4.3 %), the first peak within 10 % of twice the static settlement (+3.2 %, +5.3 %). The
+/// bounds are loose because the mean does not converge with d0: the SPH layer is 3–5 % softer
+/// than E_oed in a box five or ten spacings wide (NOTES.md, "A dry layer's self-weight
+/// settlement").
+///
+/// Known miss, not asserted: left to ring for 1 s (20 periods) the mean creeps on, more at
+/// finer d0 (+3.3 % at 1 cm, +14 % at 5 mm by 1 s; NOTES.md).
+#[test]
+fn a_stress_free_elastic_layer_rings_about_its_self_weight_settlement_with_the_wave_period() {
+    let (h, rho, e_oed): (f64, f64, f64) = (0.1, 1600.0, 1e5);
+    let s_static = rho * 9.80665 * h * h / (2.0 * e_oed);
+    let period = 4.0 * h / (e_oed / rho).sqrt();
+    for d0 in [0.01, 0.005] {
+        let hist = settlement_history(h, d0, 3.0 * period);
+        // Hann-windowed mean over the three periods.
+        let (mut sum, mut wsum) = (0.0, 0.0);
+        for w in hist.windows(2) {
+            let ((t0, _), (t1, s1)) = (w[0], w[1]);
+            let hann = 1.0 - (2.0 * std::f64::consts::PI * t1 / (3.0 * period)).cos();
+            sum += (t1 - t0) * hann * s1;
+            wsum += (t1 - t0) * hann;
+        }
+        let mean = sum / wsum;
+        // Upward crossings of the static level (linear interpolation between steps).
+        let ups: Vec<f64> = hist
+            .windows(2)
+            .filter(|w| w[0].1 < s_static && w[1].1 >= s_static)
+            .map(|w| w[0].0 + (w[1].0 - w[0].0) * (s_static - w[0].1) / (w[1].1 - w[0].1))
+            .collect();
+        assert!(ups.len() >= 3, "d0 = {d0}: {} upward crossings in three periods", ups.len());
+        let measured_period = (ups[ups.len() - 1] - ups[0]) / (ups.len() - 1) as f64;
+        let first_peak = hist.iter().take_while(|&&(t, _)| t < 0.75 * period).map(|&(_, s)| s).fold(0.0, f64::max);
+        let (e_mean, e_period, e_peak) =
+            (mean / s_static - 1.0, measured_period / period - 1.0, first_peak / (2.0 * s_static) - 1.0);
+        eprintln!(
+            "d0 = {d0}: mean settlement {:.4} mm against {:.4} mm ({:+.2} %), period {:.2} ms against {:.2} ms ({:+.2} %), first peak {:.4} mm against {:.4} mm ({:+.2} %)",
+            1e3 * mean,
+            1e3 * s_static,
+            100.0 * e_mean,
+            1e3 * measured_period,
+            1e3 * period,
+            100.0 * e_period,
+            1e3 * first_peak,
+            2e3 * s_static,
+            100.0 * e_peak
+        );
+        assert!(e_mean.abs() < 0.08, "d0 = {d0}: mean settlement {:+.2} %", 100.0 * e_mean);
+        assert!(e_period.abs() < 0.10, "d0 = {d0}: period {:+.2} %", 100.0 * e_period);
+        assert!(e_peak.abs() < 0.10, "d0 = {d0}: first peak {:+.2} %", 100.0 * e_peak);
+    }
+}

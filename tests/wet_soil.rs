@@ -328,10 +328,11 @@ fn fresh_deposit(end: f64) -> String {
 /// of free water: more than the kernel support (2h = 2.4 cm), so the water's own free surface
 /// is out of reach of the soil. With the top at the free surface the layer drains too fast
 /// (docs/two_phase.md, "Terzaghi consolidation"). Measured (2 vCPU, about 150 s): −2.5 / −0.5 /
-/// +0.1 / −1.2 %. A layer half as high misses early (−7 to −17 % at T_v = 0.05 depending on the
-/// box, the depth of water and d0; our guess, not verified: its consolidation time is then
-/// only a few acoustic crossings of the layer at c = 50 m/s, and Terzaghi's theory is
-/// quasi-static).
+/// +0.1 / −1.2 %. A layer half as high misses (−7 to −17 % at T_v = 0.05 depending on the box,
+/// the depth of water and d0): not from too few acoustic crossings (a water twice as stiff
+/// misses as much) but in its end state, 94 % of γ' h² / (2 E_oed) at T_v = 4, because about
+/// 100 Pa of the soil's buoyant weight near its face stays on the water at rest
+/// (docs/two_phase.md, "Terzaghi consolidation").
 #[test]
 fn a_fresh_saturated_deposit_consolidates_under_its_own_weight_along_terzaghi() {
     let worst = consolidate(&fresh_deposit, TZ_H, &[0.05, 0.2, 0.5, 1.0], |_, _| {});
@@ -339,7 +340,7 @@ fn a_fresh_saturated_deposit_consolidates_under_its_own_weight_along_terzaghi() 
 }
 
 /// Runs the deposit of `scene(end)` (a soil block `h` m high under water, the first material
-/// the soil, the second the water, E_oed = 0.1 MPa, water sound speed 50 m/s) to each T_v of
+/// the soil, the second the water, E_oed = 0.1 MPa) to each T_v of
 /// `checks`, prints U against the series and calls `each` there; returns the largest
 /// relative error. U is measured on the soil's top layer (its particles followed by id)
 /// between the undrained settlement (the water taking K_w / n of the stiffness) and the final
@@ -354,7 +355,11 @@ fn consolidate(
         common::scene(&scene(1.0)).materials.iter().map(|m| m.params.build::<f64>().expect("m")).collect();
     let (rho_s, rho_w) = (mats[0].density, mats[1].density);
     let n0 = 1.0 - rho_s / mats[0].grain_density;
-    let (e_oed, k_w, k) = (1e5, rho_w * 50.0 * 50.0, mats[0].permeability);
+    let c_w = match &mats[1].rheology {
+        regolith::fsi::rheology::Rheology::Water(w) => w.sound_speed,
+        _ => panic!("the second material is not water"),
+    };
+    let (e_oed, k_w, k) = (1e5, rho_w * c_w * c_w, mats[0].permeability);
     // c_v with the water's compressibility (K_w / n is 62 × E_oed here).
     let cv = k / (rho_w * 9.80665 * (1.0 / e_oed + n0 / k_w));
     let scene = common::scene(&scene(h * h / cv * 1.001));

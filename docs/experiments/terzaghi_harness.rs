@@ -6,7 +6,8 @@
 //   cargo test --release --test suite wet_soil::terzaghi_harness -- --nocapture
 // Knobs (environment): TZ_D0 spacing (m, default 0.01), TZ_W box width (m, 0.05), TZ_H layer
 // height (m, 0.2), TZ_HW top of the water (m, default the layer's top; above it the layer is
-// submerged), TZ_EXTRA extra [sph] lines separated by ';', TZ_CHECKS the T_v list.
+// submerged), TZ_C the water's sound speed (m/s, 50), TZ_EXTRA extra [sph] lines separated by
+// ';', TZ_CHECKS the T_v list.
 
 /// A 0.2 m saturated layer of soft elastic soil (E_oed = 0.1 MPa, k = 3.9 mm/s) that starts
 /// with no effective stress: its buoyant weight first goes to the pore water (undrained), then
@@ -16,7 +17,7 @@ fn fresh_deposit_knobs(end: f64) -> String {
         "[simulation]\nend_time = {end}\nprecision = \"f64\"\n\n[sph]\nspacing = {d0}\n{extra}\n\n\
          [[materials]]\nname = \"silt\"\nmodel = \"elastic\"\ndensity = 1600\ngrain_density = 2650\n\
          permeability = 3.9e-3\nyoungs_modulus = {e}\npoisson_ratio = 0.3\n\
-         [[materials]]\nname = \"water\"\nmodel = \"water\"\ndensity = 1000\nsound_speed = 50\nviscosity = 1e-3\n\n\
+         [[materials]]\nname = \"water\"\nmodel = \"water\"\ndensity = 1000\nsound_speed = {c}\nviscosity = 1e-3\n\n\
          [container]\nmin = [0.0, 0.0, 0.0]\nmax = [{W}, {W}, {top}]\nsoil_contact = \"smooth\"\n\n\
          [[soil_blocks]]\nmaterial = \"silt\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [{W}, {W}, {H}]\n\
          initial_pressure = 1.0\n\n\
@@ -27,6 +28,7 @@ fn fresh_deposit_knobs(end: f64) -> String {
         top = 1.5 * std::env::var("TZ_H").ok().and_then(|v| v.parse::<f64>().ok()).unwrap_or(H_DEFAULT),
         extra = std::env::var("TZ_EXTRA").unwrap_or_default().replace(";", "\n"),
         d0 = std::env::var("TZ_D0").unwrap_or("0.01".into()),
+        c = std::env::var("TZ_C").unwrap_or("50".into()),
         W = std::env::var("TZ_W").unwrap_or("0.05".into()),
         H = std::env::var("TZ_H").ok().and_then(|v| v.parse::<f64>().ok()).unwrap_or(H_DEFAULT),
     )
