@@ -731,6 +731,15 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             Err(InputError::flag("--skin", "does not apply to --carve".to_string()).into())
         }
         Command::Bench { carve: true, json, .. } => bench::carve(json.as_deref()),
+        Command::Bench { scene: BenchSceneArg::WheelLong | BenchSceneArg::RoverPatch, backend, precision, .. }
+            if backend != BackendArg::Cpu || precision != Precision::F32 =>
+        {
+            Err(InputError::flag(
+                if backend != BackendArg::Cpu { "--backend" } else { "--precision" },
+                "wheel-long and rover-patch run on the CPU backend in f32 only".to_string(),
+            )
+            .into())
+        }
         Command::Bench { scene: BenchSceneArg::WheelLong, particles, model, .. }
             if particles.is_some() || model.is_some() =>
         {
