@@ -335,30 +335,30 @@ pub fn run_wheel_long(scene: &Scene, warmup: u64, exchanges: u64) -> Result<Whee
     })
 }
 
-/// Where the example rover's description lies, from the repository root.
-const ROVER_URDF: &str = "examples/rover_description/urdf/rover.urdf";
+/// The example rover's scene, from the repository root.
+const ROVER_SCENE: &str = "examples/scenes/rover.toml";
 
-/// The example rover's URDF: under the current directory (a run from the repository root),
-/// else under the source tree this binary was built from.
-pub fn rover_urdf() -> Result<std::path::PathBuf, InputError> {
-    let here = std::env::current_dir().map(|d| d.join(ROVER_URDF)).ok();
-    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join(ROVER_URDF);
+/// The example rover's scene file: under the current directory (a run from the repository
+/// root), else under the source tree this binary was built from.
+pub fn rover_scene_file() -> Result<std::path::PathBuf, InputError> {
+    let here = std::env::current_dir().map(|d| d.join(ROVER_SCENE)).ok();
+    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join(ROVER_SCENE);
     here.into_iter().chain([built]).find(|p| p.is_file()).ok_or_else(|| {
         InputError::flag(
             "--scene",
-            format!("rover-patch needs the example rover {ROVER_URDF}: run from the repository root"),
+            format!("rover-patch needs the example scene {ROVER_SCENE}: run from the repository root"),
         )
     })
 }
 
-/// `regolith bench --scene rover-patch`: the example rover (examples/scenes/rover.toml: the
-/// four-wheeled URDF rover, 8.5 kg, wheels R = 0.07 m with 10 grousers of 8 mm, on the loose
-/// MCC soil of that scene, d0 = 2 cm, a bed 0.7 m wide and 0.1 m deep) driving straight ahead
-/// along a bed `length` m long: the wheels spin up to 3 rad/s over the first 0.1 s. With
-/// `patch = Some(l)` the soil is a moving patch of `l` m that keeps `trigger` = 1 m ahead of
-/// the front wheels. The rover starts with its front wheels just behind that point, so the
-/// patch advances as soon as it moves. Both runs start the rover at the same place.
-pub fn rover_patch_scene(length: f64, patch_length: f64, patch: bool, urdf: &Path) -> Result<Scene, InputError> {
+/// `regolith bench --scene rover-patch`: the example rover scene (`file`, examples/scenes/
+/// rover.toml: the four-wheeled URDF rover, 8.5 kg, wheels R = 0.07 m with 10 grousers of
+/// 8 mm, on its loose MCC soil, d0 = 2 cm, a bed 0.7 m wide and 0.1 m deep) with the bed made
+/// `length` m long and the rover driving straight ahead: its wheels spin up to 3 rad/s over the
+/// first 0.1 s. With `patch` the soil is a moving patch of `patch_length` m that keeps
+/// `trigger` = 1 m ahead of the front wheels. The rover starts with its front wheels just
+/// behind that point, so the patch advances as soon as it moves; both runs start it there.
+pub fn rover_patch_scene(file: &Path, length: f64, patch_length: f64, patch: bool) -> Result<Scene, InputError> {
     if !(length.is_finite() && (3.0..=100.0).contains(&length)) {
         return Err(InputError::flag("--length", format!("must be in [3, 100] m (got {length})")));
     }
@@ -371,28 +371,22 @@ pub fn rover_patch_scene(length: f64, patch_length: f64, patch: bool, urdf: &Pat
         ));
     }
     let trigger = 1.0;
-    // The wheels' centres are 0.15 m ahead of and behind the chassis origin; their grousers
-    // reach 0.078 m from the axle.
+    // The wheels' centres are 0.15 m ahead of and behind the chassis origin (rover.urdf);
+    // their grousers reach 0.078 m from the axle.
     let x0 = patch_length - trigger - 0.15 - 0.078 - 0.02;
-    let package = urdf.parent().and_then(Path::parent).and_then(Path::parent).unwrap_or(Path::new("."));
-    let quote = |p: &Path| toml::Value::String(p.display().to_string()).to_string();
     let drive = "[[0.0, 0.0], [0.1, 3.0]]";
-    let text = format!(
-        "[simulation]\nend_time = 10000.0\nprecision = \"f32\"\nexchange_interval = 0.001\n\n\
-         [sph]\nspacing = 0.02\n\n\
-         [[materials]]\nname = \"loose soil\"\nmodel = \"mcc\"\ndensity = 1600\nyoungs_modulus = 5e6\npoisson_ratio = 0.3\n\
-         mcc_m = 1.2\nmcc_kappa = 0.02\nmcc_lambda = 0.1\nmcc_v_lambda = 2.2\nocr = 2.0\n\n\
-         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [{length}, 0.7, 0.3]\n\n\
-         [terrain]\nmaterial = \"loose soil\"\ndepth = 0.1\n{patch}\n\
-         [[vehicles]]\nname = \"rover\"\nurdf = {urdf}\npackage_path = [{package}]\nposition = [{x0}, 0.35]\n\
-         grousers = {{ count = 10, height = 0.008, thickness = 0.006 }}\n\
-         drive = {{ left = {drive}, right = {drive}, max_torque = 6.0 }}\n",
-        patch =
-            if patch { format!("patch = {{ length = {patch_length}, trigger = {trigger} }}\n") } else { String::new() },
-        urdf = quote(urdf),
-        package = quote(package),
-    );
-    load_scene_source(Path::new("<bench rover-patch>"), &text, &[])
+    let mut sets: Vec<(String, String)> = vec![
+        ("simulation.end_time".into(), "10000.0".into()),
+        ("container.max".into(), format!("[{length}, 0.7, 0.3]")),
+        ("vehicles[0].position".into(), format!("[{x0}, 0.35]")),
+        ("vehicles[0].drive".into(), format!("{{ left = {drive}, right = {drive}, max_torque = 6.0 }}")),
+    ];
+    if patch {
+        sets.push(("terrain.patch".into(), format!("{{ length = {patch_length}, trigger = {trigger} }}")));
+    }
+    let sets: Vec<(String, toml::Value)> =
+        sets.into_iter().map(|(k, v)| (k, crate::scene::overrides::parse_value(&v))).collect();
+    crate::scene::load_scene(file, &sets)
 }
 
 /// One rover-patch bench run.

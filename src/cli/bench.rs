@@ -6,7 +6,7 @@ use anyhow::Context;
 
 use super::{ActiveArg, BackendArg, BenchModelArg, Failure, Precision};
 use crate::bench::{
-    BenchModel, RoverBenchResult, bench_scene, column_scene, rover_patch_scene, rover_urdf, run_bench, run_rover,
+    BenchModel, RoverBenchResult, bench_scene, column_scene, rover_patch_scene, rover_scene_file, run_bench, run_rover,
     run_wheel_long, wheel_long_scene,
 };
 use crate::input::InputError;
@@ -44,9 +44,7 @@ pub(super) fn run(
     if !(1_000..=50_000_000).contains(&particles) {
         return Err(InputError::flag("--particles", format!("must be in 1000..=50000000 (got {particles})")).into());
     }
-    if steps == 0 {
-        return Err(InputError::flag("--steps", "must be at least 1").into());
-    }
+    timed_count(steps)?;
     let prec = match precision {
         Precision::F32 => scene::Precision::F32,
         Precision::F64 => scene::Precision::F64,
@@ -123,9 +121,7 @@ pub(super) fn wheel_long(
     warmup: u64,
     json: Option<&Path>,
 ) -> Result<(), Failure> {
-    if steps == 0 {
-        return Err(InputError::flag("--steps", "must be at least 1").into());
-    }
+    timed_count(steps)?;
     // (active region, patch length) of each run.
     let mut modes: Vec<(bool, Option<f64>)> = match active {
         ActiveArg::On => vec![(true, None)],
@@ -197,13 +193,11 @@ pub(super) fn rover_patch(
     warmup: u64,
     json: Option<&Path>,
 ) -> Result<(), Failure> {
-    if steps == 0 {
-        return Err(InputError::flag("--steps", "must be at least 1").into());
-    }
-    let urdf = rover_urdf()?;
+    timed_count(steps)?;
+    let file = rover_scene_file()?;
     let mut results: Vec<RoverBenchResult> = Vec::new();
     for on in [false, true] {
-        let scene = rover_patch_scene(length, patch, on, &urdf)?;
+        let scene = rover_patch_scene(&file, length, patch, on)?;
         let r = run_rover(&scene, warmup, steps).context("bench run failed")?;
         println!(
             "bench rover-patch {}: {} → {} particles, {} markers, solver arrays {:.1} → {:.1} MB; {} exchanges, {} steps (dt {:.3e} s) in {:.2} s: {:.3e} simulated s per wall s, {:.3e} particle-steps/s; chassis x {:.3} → {:.3} m, {} advances ({} threads)",
@@ -265,6 +259,14 @@ pub(super) fn carve(json: Option<&Path>) -> Result<(), Failure> {
             "threads": rayon::current_num_threads(),
         });
         crate::output::write_json(p, &v).context("writing bench json")?;
+    }
+    Ok(())
+}
+
+/// `--steps` counts what is timed: at least one.
+fn timed_count(steps: u64) -> Result<(), Failure> {
+    if steps == 0 {
+        return Err(InputError::flag("--steps", "must be at least 1").into());
     }
     Ok(())
 }
