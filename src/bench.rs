@@ -78,6 +78,9 @@ pub struct BenchResult {
     pub list_builds: u64,
     /// Of those, steps made again because their midpoint stage left the skin (0 on wgpu).
     pub stage_retries: u64,
+    /// Bytes the solver's arrays reserve at the end, per soil particle, markers and lists
+    /// included (CPU backend; `None` on wgpu, whose buffers live on the device).
+    pub bytes_per_particle: Option<f64>,
 }
 
 /// The smallest bench block: 4 × 4 × 8 particles.
@@ -188,6 +191,7 @@ fn bench_t<T: Real>(
         neighbor_skin: scene.solver.neighbor_skin,
         list_builds: m.solver.as_cpu().map_or(steps, |c| c.list_builds() - builds0),
         stage_retries: m.solver.as_cpu().map_or(0, |c| c.stage_retries() - retries0),
+        bytes_per_particle: m.solver.as_cpu().map(|c| c.memory().total() as f64 / n.max(1) as f64),
     })
 }
 
@@ -424,7 +428,7 @@ pub fn run_rover(scene: &Scene, warmup: u64, exchanges: u64) -> Result<RoverBenc
         sim.step()?;
     }
     let advances = |s: &crate::sim::Simulation<f32>| s.patch().map_or(0, |p| p.counts().0);
-    let bytes = |s: &crate::sim::Simulation<f32>| s.system.fluid.as_cpu().map_or(0, |c| c.heap_bytes());
+    let bytes = |s: &crate::sim::Simulation<f32>| s.system.fluid.as_cpu().map_or(0, |c| c.memory().total());
     let (n0, b0, a0, x0) = (sim.system.fluid.len(), bytes(&sim), advances(&sim), sim.body_state(chassis).origin[0]);
     let (mut steps, mut particle_steps) = (0u64, 0.0);
     let t0 = sim.time();

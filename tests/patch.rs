@@ -51,7 +51,7 @@ fn a_twenty_metre_drive_on_a_one_metre_patch_keeps_its_particles_and_memory() {
     let wheel = sim.body("wheel").expect("wheel");
     let n0 = sim.system.fluid.len();
     let m0 = sim.system.fluid.marker_positions().len();
-    let mem = |s: &Simulation<f32>| s.system.fluid.as_cpu().expect("cpu").heap_bytes();
+    let mem = |s: &Simulation<f32>| s.system.fluid.as_cpu().expect("cpu").memory().total();
     let (mut mem_max, mut mem_first) = (0usize, None);
     let mut fx = Vec::new();
     let (mut n_range, mut escaped_max, mut n_ref) = ((n0, n0), 0, None);

@@ -36,6 +36,8 @@ mod geostatic;
 mod interrupt;
 #[path = "material_errors.rs"]
 mod material_errors;
+#[path = "memory.rs"]
+mod memory;
 #[path = "patch.rs"]
 mod patch;
 #[path = "rapier_plugin.rs"]

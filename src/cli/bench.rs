@@ -82,7 +82,7 @@ pub(super) fn run(
         }
         let r = run_bench(name, &scene, m, warmup, steps).context("bench run failed")?;
         println!(
-            "bench {} {:<15} {} {} skin {} h: {} particles, {} markers, {} steps ({} list builds, {} steps redone) in {:.2} s: {:.3e} particle-steps/s, {:.3e} listed pairs/s ({:.1} listed neighbours/particle, {} threads, adapter {}); dt {:.3e} s, {:.3e} simulated s per wall s",
+            "bench {} {:<15} {} {} skin {} h: {} particles, {} markers, {} steps ({} list builds, {} steps redone) in {:.2} s: {:.3e} particle-steps/s, {:.3e} listed pairs/s ({:.1} listed neighbours/particle, {} threads, adapter {}); dt {:.3e} s, {:.3e} simulated s per wall s{}",
             r.scene,
             r.model,
             r.backend,
@@ -100,7 +100,8 @@ pub(super) fn run(
             r.threads,
             r.adapter,
             r.dt_mean,
-            r.sim_s_per_wall_s
+            r.sim_s_per_wall_s,
+            r.bytes_per_particle.map_or(String::new(), |b| format!("; solver memory {b:.0} B per particle"))
         );
         results.push(r);
     }

@@ -11,7 +11,40 @@ pub(super) fn run(path: &Path, sets: &[(String, toml::Value)]) -> Result<(), Fai
     if scene.active.is_some() {
         print_active(&scene)?;
     }
+    match scene.precision {
+        crate::scene::Precision::F32 => print_memory::<f32>(&scene)?,
+        crate::scene::Precision::F64 => print_memory::<f64>(&scene)?,
+    }
     println!("ok: the scene is valid");
+    Ok(())
+}
+
+/// Builds the scene on the CPU backend in its precision, takes one soil step (so that the
+/// neighbour lists exist) and prints the bytes the solver's arrays reserve per particle, by
+/// kind: what the run's memory follows.
+fn print_memory<T: regolith_fsi::Real>(scene: &crate::scene::Scene) -> Result<(), Failure> {
+    let mut cpu = scene.clone();
+    cpu.backend = crate::scene::Backend::Cpu;
+    let fail = |e: regolith_fsi::SolverError| Failure::from(anyhow::Error::new(e));
+    let mut a = crate::build::assemble::<T>(&cpu).map_err(|e| Failure::from(anyhow::Error::new(e)))?;
+    a.system.fluid.step(None).map_err(fail)?;
+    let fluid = &a.system.fluid;
+    let Some(m) = fluid.as_cpu().map(|c| c.memory()) else { return Ok(()) };
+    let (n, markers) = (fluid.len().max(1), fluid.marker_positions().len());
+    let per = |b: usize| b as f64 / n as f64;
+    println!(
+        "  memory (CPU backend, {}, after one step): {:.0} B per particle ({:.1} MB for {} particles and {} markers, {:.2} markers per particle): particles {:.0} B, markers {:.0} B, neighbour lists {:.0} B, sorting {:.0} B",
+        scene.precision.name(),
+        per(m.total()),
+        1e-6 * m.total() as f64,
+        fluid.len(),
+        markers,
+        markers as f64 / n as f64,
+        per(m.particles),
+        per(m.markers),
+        per(m.lists),
+        per(m.sorting),
+    );
     Ok(())
 }
 

@@ -114,6 +114,11 @@ pub struct CellSort {
 }
 
 impl CellSort {
+    /// Every array the sort reserves (see `memory`).
+    pub(super) fn parts(&self) -> [&Vec<u32>; 4] {
+        [&self.start, &self.order, &self.cell_of, &self.next]
+    }
+
     /// Sorts points by cell (stable within a cell). Points outside the grid go to the end.
     pub fn sort<T: Real>(&mut self, idx: &CellIndexer<T>, pos: &[Vec3<T>]) {
         const OUT: u32 = u32::MAX;

@@ -16,11 +16,13 @@
 
 mod grid;
 mod lanes;
+mod memory;
 mod neighbors;
 mod rates;
 mod wet;
 
 pub use grid::GridSpec;
+pub use memory::MemoryUse;
 
 use rayon::prelude::*;
 
@@ -705,57 +707,6 @@ impl<T: Real> CpuSph<T> {
         self.lists_valid = false;
         self.x_ref.clear();
         Ok(lifted)
-    }
-
-    /// Bytes held by the particle, marker and neighbour-list arrays (their capacities): what
-    /// the solver's memory follows.
-    pub fn heap_bytes(&self) -> usize {
-        fn b<V>(v: &[V], cap: usize) -> usize {
-            let _ = v;
-            cap * size_of::<V>()
-        }
-        macro_rules! sum {
-            ($($v:expr),* $(,)?) => { 0 $(+ b(&$v, $v.capacity()))* };
-        }
-        sum!(
-            self.pos,
-            self.vel,
-            self.rho,
-            self.sigma,
-            self.state,
-            self.material,
-            self.mass,
-            self.id,
-            self.free_surface,
-            self.detached,
-            self.s_pos,
-            self.s_vel,
-            self.s_rho,
-            self.s_sigma,
-            self.s_state,
-            self.packed,
-            self.moduli,
-            self.rates,
-            self.m_pos,
-            self.m_vel,
-            self.m_acc,
-            self.m_owner,
-            self.m_force,
-            self.ms_pos,
-            self.ms_vel,
-            self.ms_acc,
-            self.touched,
-            self.m_packed,
-            self.ms_force,
-            self.ms_orig,
-            self.x_ref,
-            self.nl_ss.offsets,
-            self.nl_ss.indices,
-            self.nl_sm.offsets,
-            self.nl_sm.indices,
-            self.nl_ms.offsets,
-            self.nl_ms.indices,
-        )
     }
 
     /// Reorders every per-particle array over `lo..lo + order.len()`: the particle at

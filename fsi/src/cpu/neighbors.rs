@@ -13,20 +13,38 @@ use crate::math::Vec3;
 use super::grid::{CellIndexer, CellSort};
 
 /// For each query point, the indices of target points within the radius.
+///
+/// The entries stay in the per-chunk vectors the parallel build filled (queries
+/// `k·CHUNK..(k+1)·CHUNK` in chunk `k`): concatenating them into one array would hold every
+/// list twice, the chunks being kept between builds so that a rebuild does not allocate.
 #[derive(Clone, Debug, Default)]
 pub struct NeighborList {
-    /// `offsets[i]..offsets[i + 1]` index `indices` for query `i`.
-    pub offsets: Vec<u32>,
-    /// Target indices.
-    pub indices: Vec<u32>,
-    chunk_counts: Vec<Vec<u32>>,
-    chunk_lists: Vec<Vec<u32>>,
+    /// `offsets[i]..offsets[i + 1]` are query `i`'s entries, counted over the whole list.
+    offsets: Vec<u32>,
+    /// The entries of each chunk of queries, in query order; chunk `k` starts at entry
+    /// `offsets[k·CHUNK]`.
+    chunks: Vec<Vec<u32>>,
     /// Transpose scratch, one entry per target, zero (and `u32::MAX`) between calls.
     count: Vec<u32>,
     row_of: Vec<u32>,
 }
 
 const CHUNK: usize = 512;
+
+/// Sizes `chunks` for `rows` queries, dropping chunks left over from a larger build; with
+/// `offsets` (the whole list's, filled) each chunk is also resized to hold its entries.
+fn size_chunks(chunks: &mut Vec<Vec<u32>>, rows: usize, offsets: Option<&[u32]>) {
+    let n = rows.div_ceil(CHUNK);
+    chunks.truncate(n);
+    chunks.resize_with(n, Vec::new);
+    if let Some(offsets) = offsets {
+        for (k, c) in chunks.iter_mut().enumerate() {
+            let len = offsets[((k + 1) * CHUNK).min(rows)] - offsets[k * CHUNK];
+            c.clear();
+            c.resize(len as usize, 0);
+        }
+    }
+}
 
 /// Cells a search of `radius` scans on each side of a query's cell (edge `cell`).
 pub fn reach(radius: f64, cell: f64) -> usize {
@@ -45,15 +63,37 @@ pub struct TargetGroup<'a, T> {
 }
 
 impl NeighborList {
+    /// Every array the list reserves: the offsets, the entries' chunks and the transpose
+    /// scratch (see `memory`).
+    pub(super) fn parts(&self) -> impl Iterator<Item = &Vec<u32>> {
+        [&self.offsets, &self.count, &self.row_of].into_iter().chain(&self.chunks)
+    }
+
     /// Neighbours of `i`.
     #[inline(always)]
     pub fn of(&self, i: usize) -> &[u32] {
-        &self.indices[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+        let c = i / CHUNK;
+        let base = self.offsets[c * CHUNK];
+        &self.chunks[c][(self.offsets[i] - base) as usize..(self.offsets[i + 1] - base) as usize]
     }
 
     /// Total number of pairs.
     pub fn pairs(&self) -> usize {
-        self.indices.len()
+        self.offsets.last().map_or(0, |&n| n as usize)
+    }
+
+    /// A list from its rows (query `i` lists `rows[i]`).
+    #[cfg(test)]
+    pub fn from_rows(rows: &[Vec<u32>]) -> Self {
+        let mut nl = Self { offsets: vec![0], ..Self::default() };
+        for (k, row) in rows.iter().enumerate() {
+            if k % CHUNK == 0 {
+                nl.chunks.push(Vec::new());
+            }
+            nl.chunks.last_mut().expect("pushed above").extend_from_slice(row);
+            nl.offsets.push(nl.offsets[k] + row.len() as u32);
+        }
+        nl
     }
 
     /// Builds the list of targets (sorted by `sort` over `idx`, positions `targets`) within
@@ -86,18 +126,18 @@ impl NeighborList {
         // Cells to scan on each side: the radius over the cell edge, rounded up.
         let reach = reach(radius.as_f64(), idx.cell().as_f64());
         let n = queries.len();
-        let chunks = n.div_ceil(CHUNK);
-        self.chunk_counts.resize_with(chunks, Vec::new);
-        self.chunk_lists.resize_with(chunks, Vec::new);
+        size_chunks(&mut self.chunks, n, None);
+        self.offsets.clear();
+        self.offsets.resize(n + 1, 0);
         let dims = idx.dims();
-        self.chunk_counts.par_iter_mut().zip(self.chunk_lists.par_iter_mut()).enumerate().for_each(
-            |(ch, (counts, list))| {
-                counts.clear();
+        // Each chunk lists its queries' targets and writes each query's end within the chunk.
+        self.offsets[1..].par_chunks_mut(CHUNK).zip(self.chunks.par_iter_mut()).enumerate().for_each(
+            |(ch, (ends, list))| {
                 list.clear();
                 let lo = ch * CHUNK;
-                let hi = (lo + CHUNK).min(n);
-                for (i, &p) in queries.iter().enumerate().take(hi).skip(lo) {
-                    let before = list.len();
+                for (k, end) in ends.iter_mut().enumerate() {
+                    let i = lo + k;
+                    let p = queries[i];
                     if let Some(c) = idx.coords(p) {
                         let x0 = c[0].saturating_sub(reach);
                         let x1 = (c[0] + reach).min(dims[0] - 1);
@@ -123,33 +163,24 @@ impl NeighborList {
                             }
                         }
                     }
-                    counts.push((list.len() - before) as u32);
+                    *end = list.len() as u32;
+                }
+                // A vector that grew by doubling may hold up to twice its entries; give back
+                // what the next build is unlikely to need (it keeps 1/8 to grow into).
+                let len = list.len();
+                if list.capacity() > len + len / 2 {
+                    list.shrink_to(len + len / 8);
                 }
             },
         );
-        self.offsets.clear();
-        self.offsets.reserve(n + 1);
-        self.offsets.push(0);
-        let mut total = 0u32;
-        for counts in &self.chunk_counts[..chunks] {
-            for &c in counts {
-                total += c;
-                self.offsets.push(total);
+        // Chunk-local ends to whole-list offsets.
+        let mut base = 0;
+        for ends in self.offsets[1..].chunks_mut(CHUNK) {
+            for e in ends.iter_mut() {
+                *e += base;
             }
+            base = ends.last().copied().unwrap_or(base);
         }
-        self.indices.resize(total as usize, 0);
-        // Copy each chunk's list into its slot.
-        let mut rest: &mut [u32] = &mut self.indices;
-        let mut slices = Vec::with_capacity(chunks);
-        for list in &self.chunk_lists[..chunks] {
-            let (head, tail) = rest.split_at_mut(list.len());
-            slices.push(head);
-            rest = tail;
-        }
-        slices
-            .into_par_iter()
-            .zip(self.chunk_lists[..chunks].par_iter())
-            .for_each(|(dst, src)| dst.copy_from_slice(src));
     }
 }
 
@@ -166,7 +197,7 @@ impl NeighborList {
         count.resize(targets, 0);
         row_of.resize(targets, u32::MAX);
         touched.clear();
-        for &j in &other.indices {
+        for &j in other.chunks.iter().flatten() {
             let c = &mut count[j as usize];
             if *c == 0 {
                 touched.push(j);
@@ -182,17 +213,19 @@ impl NeighborList {
             total += count[j as usize];
             self.offsets.push(total);
         }
-        self.indices.resize(total as usize, 0);
-        let mut next: Vec<u32> = self.offsets[..touched.len()].to_vec();
+        let rows = touched.len();
+        size_chunks(&mut self.chunks, rows, Some(&self.offsets));
+        let mut next: Vec<u32> = self.offsets[..rows].to_vec();
         for q in 0..other.offsets.len().saturating_sub(1) {
             for &j in other.of(q) {
                 let row = row_of[j as usize] as usize;
-                self.indices[next[row] as usize] = q as u32;
+                let c = row / CHUNK;
+                self.chunks[c][(next[row] - self.offsets[c * CHUNK]) as usize] = q as u32;
                 next[row] += 1;
             }
         }
         let row_of = &*row_of;
-        other.indices.par_iter_mut().for_each(|j| *j = row_of[*j as usize]);
+        other.chunks.par_iter_mut().for_each(|c| c.iter_mut().for_each(|j| *j = row_of[*j as usize]));
         for &j in touched.iter() {
             self.count[j as usize] = 0;
             self.row_of[j as usize] = u32::MAX;

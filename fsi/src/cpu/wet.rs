@@ -785,12 +785,10 @@ mod tests {
                 phase.push(Phase { water: false, vg: (1.0 - n0) * vol / lattice_sum, inv_k: 1e3 });
             }
             let m = packed.len();
-            let mut offsets = vec![0, (m - 1) as u32];
-            offsets.extend(std::iter::repeat_n((m - 1) as u32, m - 1));
-            let mut nl_ss = NeighborList::default();
-            (nl_ss.offsets, nl_ss.indices) = (offsets, (1..m as u32).collect());
-            let mut nl_sm = NeighborList::default();
-            nl_sm.offsets = vec![0; m + 1];
+            let mut rows = vec![Vec::new(); m];
+            rows[0] = (1..m as u32).collect();
+            let nl_ss = NeighborList::from_rows(&rows);
+            let nl_sm = NeighborList::from_rows(&vec![Vec::new(); m]);
             let plain: f64 = 1.0
                 - packed[1..]
                     .iter()
