@@ -361,6 +361,11 @@ fn check_cli_exit_codes() {
     assert!(err.contains("key `sph.kernel`: unknown variant `gauss`"), "{err}");
     let missing = run(&["check", "no/such/scene.toml"]);
     assert_eq!(missing.status.code(), Some(2));
+    let markers = run(&["check", "examples/scenes/geostatic_box.toml", "--set", "sph.body_markers=\"middle\""]);
+    assert_eq!(markers.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&markers.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("key `sph.body_markers`: unknown variant `middle`, expected `surface` or `inset`"), "{err}");
 }
 
 const BODY: &str = "\n[[bodies]]\nname = \"wheel\"\nshape = { type = \"wheel\", radius = 0.1, width = 0.05 }\nmass = 2.0\nposition = [0.2, 0.2, 0.4]\n\n[rig]\ntype = \"wheel\"\nbody = \"wheel\"\nload = 30.0\nangular_velocity = 1.0\nslips = [0.0, 0.3]\n";

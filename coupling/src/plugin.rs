@@ -78,7 +78,7 @@ impl<T: Real> RapierSoil<T> {
             let rb = bodies
                 .get(a.handle)
                 .ok_or_else(|| CouplingError::Invalid(format!("attachment {k}: no such rigid body in the set")))?;
-            let local = crate::shape_markers(&a.shape, config.spacing, a.layers)?;
+            let local = crate::shape_markers(&a.shape, config.spacing, a.layers, 0.0)?;
             let s = state_of(rb, ([0.0; 3], [0.0; 3]));
             domain = grow_domain(domain, s.origin, a.shape.bounding_radius() + 2.0 * config.h());
             let first = markers.len();

@@ -7,13 +7,15 @@ use regolith_terrain::TerrainBuild;
 use super::BuildError;
 use crate::scene::Scene;
 
-/// Removes the soil particles that start inside an FSI body grown by half a spacing (the
-/// distance at which its markers and the soil would overlap), with a note per body.
+/// Removes the soil particles that start inside an FSI body grown by half a spacing less the
+/// markers' inset (the distance at which its outermost markers and the soil would overlap),
+/// with a note per body.
 pub fn carve_bodies(scene: &Scene, terrain: &mut TerrainBuild) {
     let d0 = scene.solver.spacing;
+    let margin = 0.5 * d0 - scene.body_markers.inset(d0);
     for b in scene.bodies.iter().filter(|b| b.fsi) {
         let local: Vec<[f64; 3]> = terrain.particles.iter().map(|p| b.desc.pose.to_local(p.pos)).collect();
-        let inside = b.desc.shape.contains_points(&local, 0.5 * d0);
+        let inside = b.desc.shape.contains_points(&local, margin);
         let removed = inside.iter().filter(|x| **x).count();
         if removed > 0 {
             let mut it = inside.iter();

@@ -349,7 +349,7 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
         if !b.fsi {
             continue;
         }
-        let local = shape_markers(&b.desc.shape, d0, b.bce_layers)
+        let local = shape_markers(&b.desc.shape, d0, b.bce_layers, scene.body_markers.inset(d0))
             .map_err(|source| BuildError::Markers { key: b.key.clone(), source })?;
         fsi_bodies.push((id, local));
         // The neighbour grid must cover the body where it starts and, if prescribed, where it

@@ -6,11 +6,13 @@ use regolith_rigid::{BodyId, JointDesc, JointId, RigidWorld};
 use super::{BuildError, SurfaceGrid};
 use crate::scene::{BodySpec, Scene, VehicleSpec};
 
-/// Lowers every vehicle without a given height so that its lowest collision point sits one
-/// spacing above the top soil particle's centre below it (the contact distance of markers and
-/// soil), as the rigs place their bodies.
+/// Lowers every vehicle without a given height so that its lowest markers sit one spacing
+/// above the top soil particle's centre below it (the contact distance of markers and soil),
+/// as the rigs place their bodies: its lowest collision point that high with markers on the
+/// surface, half a spacing lower with `body_markers = "inset"`.
 pub fn place_vehicles(scene: &mut Scene, surface: &SurfaceGrid) -> Result<(), BuildError> {
     let d0 = scene.solver.spacing;
+    let inset = scene.body_markers.inset(d0);
     for v in scene.vehicles.clone() {
         if !v.place_on_soil {
             continue;
@@ -24,7 +26,7 @@ pub fn place_vehicles(scene: &mut Scene, surface: &SurfaceGrid) -> Result<(), Bu
             }
             let t = b.desc.pose.translation;
             if let Some(top) = surface.height(t[0], t[1], b.desc.shape.bounding_radius()) {
-                lift = lift.max(top + 0.5 * d0 - low);
+                lift = lift.max(top + 0.5 * d0 - inset - low);
             }
         }
         if !lift.is_finite() {

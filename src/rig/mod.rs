@@ -49,13 +49,15 @@ fn footprint(shape: &ShapeDesc) -> f64 {
     }
 }
 
-/// Places body `i` so its lowest point is one spacing above the soil top; returns that height.
+/// Places body `i` so that its lowest markers are one spacing above the top soil particle
+/// (its lowest point one spacing above it with markers on the surface, half a spacing with
+/// `body_markers = "inset"`: on the soil's surface); returns that height.
 pub fn place_on_soil(scene: &mut Scene, i: usize) -> Result<f64, BuildError> {
     let d0 = scene.solver.spacing;
     let b = &scene.bodies[i].desc;
     let [x, y, _] = b.pose.translation;
     let top = soil_top(scene, x, y, footprint(&b.shape).max(d0))?;
-    let bottom = top + d0;
+    let bottom = top + d0 - scene.body_markers.inset(d0);
     let z = bottom + bottom_offset(&b.shape);
     scene.bodies[i].desc.pose.translation[2] = z;
     Ok(bottom)

@@ -102,6 +102,7 @@ pub(crate) struct SphFile {
     pub bce_layers: Option<i64>,
     pub neighbor_skin: Option<f64>,
     pub drag: Option<DragName>,
+    pub body_markers: Option<BodyMarkersName>,
     pub active: Option<ActiveFile>,
 }
 
@@ -121,6 +122,13 @@ pub(crate) struct ActiveFile {
 pub(crate) enum FreeSurfaceStressName {
     Keep,
     Zero,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum BodyMarkersName {
+    Surface,
+    Inset,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]

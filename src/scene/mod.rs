@@ -54,8 +54,9 @@ use rig::resolve_rig;
 use settings::{Settings, resolve_settings};
 use soil::resolve_soil;
 pub use types::{
-    ActiveSpec, Backend, BodySpec, DEFAULT_ACTIVE_DEPTH_FACTOR, DEFAULT_RUNAWAY_SPEED, DEFAULT_SLEEP_SPEED, OutputSpec,
-    PatchSpec, PlateControl, Precision, RigSpec, Scene, SceneMaterial, SoilSpec, WheelDrive,
+    ActiveSpec, Backend, BodyMarkers, BodySpec, DEFAULT_ACTIVE_DEPTH_FACTOR, DEFAULT_RUNAWAY_SPEED,
+    DEFAULT_SLEEP_SPEED, OutputSpec, PatchSpec, PlateControl, Precision, RigSpec, Scene, SceneMaterial, SoilSpec,
+    WheelDrive,
 };
 
 pub use vehicle::{Profile, VehicleSpec, WheelSpec};
@@ -123,7 +124,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     let e = |key: &str, msg: String| key_err(path, source, key, msg);
     let dir = path.parent().unwrap_or(Path::new("."));
 
-    let Settings { end_time, backend, precision, precision_set, solver, exchange_interval, active } =
+    let Settings { end_time, backend, precision, precision_set, solver, exchange_interval, active, body_markers } =
         resolve_settings(file.simulation.as_ref(), file.sph.as_ref(), &e)?;
     let (spacing, bce_layers) = (solver.spacing, solver.bce_layers);
     let (materials, container, soil) = resolve_soil(path, source, dir, &file, spacing, &e)?;
@@ -205,6 +206,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
         bodies,
         rig,
         exchange_interval,
+        body_markers,
         runaway_speed,
         output,
         vehicles,

@@ -180,7 +180,14 @@ pub fn describe(scene: &Scene) -> String {
     let mut markers = 0usize;
     for b in &scene.bodies {
         let n = if b.fsi {
-            regolith_coupling::shape_markers(&b.desc.shape, sv.spacing, b.bce_layers).map(|m| m.len()).unwrap_or(0)
+            regolith_coupling::shape_markers(
+                &b.desc.shape,
+                sv.spacing,
+                b.bce_layers,
+                scene.body_markers.inset(sv.spacing),
+            )
+            .map(|m| m.len())
+            .unwrap_or(0)
         } else {
             0
         };
@@ -206,7 +213,15 @@ pub fn describe(scene: &Scene) -> String {
             b.desc.pose.translation[0],
             b.desc.pose.translation[1],
             b.desc.pose.translation[2],
-            if b.fsi { format!("{n} BCE markers in {} layers", b.bce_layers) } else { "no soil contact".into() }
+            if b.fsi {
+                let at = match scene.body_markers {
+                    crate::scene::BodyMarkers::Surface => "the first on the surface",
+                    crate::scene::BodyMarkers::Inset => "the first d0/2 inside the surface",
+                };
+                format!("{n} BCE markers in {} layers, {at}", b.bce_layers)
+            } else {
+                "no soil contact".into()
+            }
         );
     }
     for v in &scene.vehicles {

@@ -13,6 +13,7 @@ pub(super) struct Settings {
     pub solver: SolverConfig,
     pub exchange_interval: f64,
     pub active: Option<ActiveSpec>,
+    pub body_markers: BodyMarkers,
 }
 
 pub(super) fn resolve_settings(
@@ -207,7 +208,11 @@ pub(super) fn resolve_settings(
         ));
     }
     let active = resolve_active(sph.active.as_ref(), &solver, e)?;
-    Ok(Settings { end_time, backend, precision, precision_set, solver, exchange_interval, active })
+    let body_markers = match sph.body_markers {
+        None | Some(file::BodyMarkersName::Surface) => BodyMarkers::Surface,
+        Some(file::BodyMarkersName::Inset) => BodyMarkers::Inset,
+    };
+    Ok(Settings { end_time, backend, precision, precision_set, solver, exchange_interval, active, body_markers })
 }
 
 /// `[sph.active]`. Every key but `enabled` needs `enabled = true`, so that a setting is never

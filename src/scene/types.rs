@@ -33,6 +33,37 @@ pub enum Precision {
     F64,
 }
 
+/// Where a body's outermost BCE marker layer lies (`[sph] body_markers`). Soil resting on
+/// markers sits one spacing from them, i.e. meets the body half a spacing outside the
+/// outermost layer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BodyMarkers {
+    /// On the body's surface (the default): the body acts half a spacing larger than its
+    /// geometry on every face (a plate of radius R as R + d0/2).
+    #[default]
+    Surface,
+    /// Half a spacing inside the surface: the soil meets the body's geometry.
+    Inset,
+}
+
+impl BodyMarkers {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Surface => "surface",
+            Self::Inset => "inset",
+        }
+    }
+
+    /// Depth of the outermost layer below the surface at spacing `d0` (m).
+    pub fn inset(self, d0: f64) -> f64 {
+        match self {
+            Self::Surface => 0.0,
+            Self::Inset => 0.5 * d0,
+        }
+    }
+}
+
 impl Precision {
     /// Name as in scene files.
     pub fn name(self) -> &'static str {
@@ -230,6 +261,8 @@ pub struct Scene {
     pub rig: Option<RigSpec>,
     /// Soil–body exchange interval (s).
     pub exchange_interval: f64,
+    /// Where the bodies' outermost BCE layer lies (`[sph] body_markers`).
+    pub body_markers: BodyMarkers,
     /// A particle faster than this (m/s) stops the run as a runaway (`[simulation]
     /// runaway_speed`, default [`DEFAULT_RUNAWAY_SPEED`]).
     pub runaway_speed: f64,
