@@ -1,21 +1,24 @@
 //! BCE markers of a body, in its body frame, generated from its shape.
 //!
 //! Markers fill `layers` layers at spacing d0 inward from the surface, the outermost layer on
-//! the surface itself (`inset = 0`) or `inset` below it. A lattice point stands for a d0³ cell,
-//! so soil resting on markers meets the body half a spacing outside the outermost layer: with
-//! markers on the surface the body acts half a spacing larger than its geometry on every
-//! face, with `inset = d0/2` the contact lies on the geometry. A part thinner than twice the
-//! inset keeps one layer on its mid-surface (it acts d0 thick). Curved surfaces are sampled on rings and shells that follow them (a
-//! lattice would leave steps), flat faces on regular grids:
-//! - boxes: the surfaces of the box shrunk by k·d0;
-//! - spheres: shells of radius R − k·d0;
+//! the surface itself (`inset = 0`) or `inset` below it. A lattice point stands for a d0³
+//! cell, so soil resting on markers meets the body half a spacing outside the outermost
+//! layer: with markers on the surface the body acts half a spacing larger than its geometry
+//! on every face, with `inset = d0/2` the contact lies on the geometry. A part thinner than
+//! twice the inset keeps one layer on its mid-surface (it acts d0 thick). Curved surfaces are
+//! sampled on rings and shells that follow them (a lattice would leave steps), flat faces on
+//! regular grids (layer k at depth `inset + k·d0`):
+//! - boxes: the surfaces of the box shrunk by that depth;
+//! - spheres: shells of radius R less that depth;
 //! - cylinders and wheels: coaxial shells and cap discs; grousers are boxes on the rim;
-//! - cones: the cone offset inward by k·d0 along its normal, sampled on rings along the slant.
+//! - cones: the cone offset inward by that depth along its normal, sampled on rings along the
+//!   slant.
 //!   The tip is truncated: the first ring sits at radius d0/2 with at least three markers, so
 //!   the tip is never a single marker (a lone apex marker blows up under load in the anchor);
-//! - triangle meshes: the triangles sampled at spacing d0, then lattice points inside the mesh
-//!   within (layers − ½)·d0 of the surface; the mesh must be watertight (closed, consistently
-//!   oriented), otherwise inside is undefined and the generation is an error;
+//! - triangle meshes: the triangles sampled at spacing d0 and moved `inset` inward along their
+//!   normals, then lattice points inside the mesh within `inset + (layers − ½)·d0` of the
+//!   surface; the mesh must be watertight (closed, consistently oriented), otherwise inside is
+//!   undefined and the generation is an error; one wound inward is turned around;
 //! - compounds: the union of their parts.
 //!
 //! Markers closer than d0/2 to one already placed are dropped, so overlapping parts and seams
