@@ -11,8 +11,7 @@ use crate::scene::Scene;
 /// markers' inset (the distance at which its outermost markers and the soil would overlap),
 /// with a note per body.
 pub fn carve_bodies(scene: &Scene, terrain: &mut TerrainBuild) {
-    let d0 = scene.solver.spacing;
-    let margin = 0.5 * d0 - scene.body_markers.inset(d0);
+    let margin = scene.body_markers.contact_offset(scene.solver.spacing);
     for b in scene.bodies.iter().filter(|b| b.fsi) {
         let local: Vec<[f64; 3]> = terrain.particles.iter().map(|p| b.desc.pose.to_local(p.pos)).collect();
         let inside = b.desc.shape.contains_points(&local, margin);

@@ -11,8 +11,7 @@ use crate::scene::{BodySpec, Scene, VehicleSpec};
 /// as the rigs place their bodies: its lowest collision point that high with markers on the
 /// surface, half a spacing lower with `body_markers = "inset"`.
 pub fn place_vehicles(scene: &mut Scene, surface: &SurfaceGrid) -> Result<(), BuildError> {
-    let d0 = scene.solver.spacing;
-    let inset = scene.body_markers.inset(d0);
+    let offset = scene.body_markers.contact_offset(scene.solver.spacing);
     for v in scene.vehicles.clone() {
         if !v.place_on_soil {
             continue;
@@ -26,7 +25,7 @@ pub fn place_vehicles(scene: &mut Scene, surface: &SurfaceGrid) -> Result<(), Bu
             }
             let t = b.desc.pose.translation;
             if let Some(top) = surface.height(t[0], t[1], b.desc.shape.bounding_radius()) {
-                lift = lift.max(top + 0.5 * d0 - inset - low);
+                lift = lift.max(top + offset - low);
             }
         }
         if !lift.is_finite() {

@@ -8,26 +8,26 @@ use crate::scene::{describe, load_scene};
 pub(super) fn run(path: &Path, sets: &[(String, toml::Value)]) -> Result<(), Failure> {
     let scene = load_scene(path, sets)?;
     print!("{}", describe(&scene));
-    if scene.active.is_some() {
-        print_active(&scene)?;
-    }
     match scene.precision {
-        crate::scene::Precision::F32 => print_memory::<f32>(&scene)?,
-        crate::scene::Precision::F64 => print_memory::<f64>(&scene)?,
+        crate::scene::Precision::F32 => print_built::<f32>(&scene)?,
+        crate::scene::Precision::F64 => print_built::<f64>(&scene)?,
     }
     println!("ok: the scene is valid");
     Ok(())
 }
 
-/// Builds the scene on the CPU backend in its precision, takes one soil step (so that the
-/// neighbour lists exist) and prints the bytes the solver's arrays reserve per particle, by
-/// kind: what the run's memory follows.
-fn print_memory<T: regolith_fsi::Real>(scene: &crate::scene::Scene) -> Result<(), Failure> {
+/// Builds the scene on the CPU backend in its precision and prints what a run's cost and
+/// memory follow: with an active region, how many particles it integrates at the start; then,
+/// after one soil step (so that the neighbour lists exist), the bytes the solver's arrays
+/// reserve per particle, by kind.
+fn print_built<T: regolith_fsi::Real>(scene: &crate::scene::Scene) -> Result<(), Failure> {
     let mut cpu = scene.clone();
     cpu.backend = crate::scene::Backend::Cpu;
-    let fail = |e: regolith_fsi::SolverError| Failure::from(anyhow::Error::new(e));
     let mut a = crate::build::assemble::<T>(&cpu).map_err(|e| Failure::from(anyhow::Error::new(e)))?;
-    a.system.fluid.step(None).map_err(fail)?;
+    if scene.active.is_some() {
+        print_active(scene, &a.system);
+    }
+    a.system.fluid.step(None).map_err(|e| Failure::from(anyhow::Error::new(e)))?;
     let fluid = &a.system.fluid;
     let Some(m) = fluid.as_cpu().map(|c| c.memory()) else { return Ok(()) };
     let (n, markers) = (fluid.len().max(1), fluid.marker_positions().len());
@@ -48,14 +48,10 @@ fn print_memory<T: regolith_fsi::Real>(scene: &crate::scene::Scene) -> Result<()
     Ok(())
 }
 
-/// Builds the scene (CPU, f32) and reports how many particles the active region integrates at
-/// the start: what a run's cost follows.
-fn print_active(scene: &crate::scene::Scene) -> Result<(), Failure> {
-    let mut cpu = scene.clone();
-    cpu.backend = crate::scene::Backend::Cpu;
-    let a = crate::build::assemble::<f32>(&cpu).map_err(|e| Failure::from(anyhow::Error::new(e)))?;
-    let fluid = &a.system.fluid;
-    let states = a.system.states_at(0.0);
+/// How many particles the active region integrates at the start of `system`.
+fn print_active<T: regolith_fsi::Real>(scene: &crate::scene::Scene, system: &regolith_coupling::FsiSystem<T>) {
+    let fluid = &system.fluid;
+    let states = system.states_at(0.0);
     let roles = fluid.as_cpu().and_then(|c| c.expected_roles(&states));
     match roles {
         Some(r) => {
@@ -75,5 +71,4 @@ fn print_active(scene: &crate::scene::Scene) -> Result<(), Failure> {
         }
         None => println!("  active region: none (no FSI body): the whole domain is awake"),
     }
-    Ok(())
 }

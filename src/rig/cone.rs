@@ -23,10 +23,8 @@ pub(super) fn cone<T: Real>(
     };
     sc.bodies[body].desc.motion = Motion::Prescribed { linvel: [0.0, 0.0, -speed], angvel: [0.0; 3] };
     let tip0 = place_on_soil(&mut sc, body)?;
-    // The soil surface: the top particle's cell ends half a spacing above its centre; the tip
-    // starts one spacing above that centre less the markers' inset.
-    let d0 = sc.solver.spacing;
-    let surface = tip0 - (0.5 * d0 - sc.body_markers.inset(d0));
+    // The soil surface: the tip starts the contact offset above it.
+    let surface = tip0 - sc.body_markers.contact_offset(sc.solver.spacing);
     let area = std::f64::consts::PI * radius * radius;
     let mut sim = Simulation::<T>::new(&sc)?;
     let mut series = Series::new(&sim, false, &["tip_depth", "base_depth", "cone_force", "cone_index"]);

@@ -57,7 +57,8 @@ pub fn place_on_soil(scene: &mut Scene, i: usize) -> Result<f64, BuildError> {
     let b = &scene.bodies[i].desc;
     let [x, y, _] = b.pose.translation;
     let top = soil_top(scene, x, y, footprint(&b.shape).max(d0))?;
-    let bottom = top + d0 - scene.body_markers.inset(d0);
+    // The top particle's cell ends half a spacing above its centre: the soil's surface.
+    let bottom = top + (0.5 * d0 + scene.body_markers.contact_offset(d0));
     let z = bottom + bottom_offset(&b.shape);
     scene.bodies[i].desc.pose.translation[2] = z;
     Ok(bottom)

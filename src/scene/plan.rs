@@ -214,11 +214,7 @@ pub fn describe(scene: &Scene) -> String {
             b.desc.pose.translation[1],
             b.desc.pose.translation[2],
             if b.fsi {
-                let at = match scene.body_markers {
-                    crate::scene::BodyMarkers::Surface => "the first on the surface",
-                    crate::scene::BodyMarkers::Inset => "the first d0/2 inside the surface",
-                };
-                format!("{n} BCE markers in {} layers, {at}", b.bce_layers)
+                format!("{n} BCE markers in {} layers, {}", b.bce_layers, scene.body_markers.describe())
             } else {
                 "no soil contact".into()
             }

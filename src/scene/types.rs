@@ -47,11 +47,11 @@ pub enum BodyMarkers {
 }
 
 impl BodyMarkers {
-    /// Name as in scene files.
-    pub fn name(self) -> &'static str {
+    /// Where the outermost layer lies, in words (`regolith check`).
+    pub fn describe(self) -> &'static str {
         match self {
-            Self::Surface => "surface",
-            Self::Inset => "inset",
+            Self::Surface => "the first on the surface",
+            Self::Inset => "the first d0/2 inside the surface",
         }
     }
 
@@ -61,6 +61,14 @@ impl BodyMarkers {
             Self::Surface => 0.0,
             Self::Inset => 0.5 * d0,
         }
+    }
+
+    /// How far outside its geometry a body meets the soil (m): soil rests one spacing from
+    /// the outermost markers, i.e. half a spacing beyond them, less the inset. Rigs and
+    /// vehicles start bodies this far above the soil's surface, and soil closer than this to
+    /// a body at the start is carved out.
+    pub fn contact_offset(self, d0: f64) -> f64 {
+        0.5 * d0 - self.inset(d0)
     }
 }
 

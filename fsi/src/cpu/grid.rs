@@ -114,9 +114,10 @@ pub struct CellSort {
 }
 
 impl CellSort {
-    /// Every array the sort reserves (see `memory`).
-    pub(super) fn parts(&self) -> [&Vec<u32>; 4] {
-        [&self.start, &self.order, &self.cell_of, &self.next]
+    /// Bytes the sort's arrays reserve.
+    pub(super) fn heap_bytes(&self) -> usize {
+        [&self.start, &self.order, &self.cell_of, &self.next].iter().map(|v| v.capacity()).sum::<usize>()
+            * size_of::<u32>()
     }
 
     /// Sorts points by cell (stable within a cell). Points outside the grid go to the end.

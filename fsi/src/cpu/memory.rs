@@ -8,8 +8,6 @@
 use crate::Real;
 
 use super::CpuSph;
-use super::grid::CellSort;
-use super::neighbors::NeighborList;
 
 /// Bytes the solver's arrays reserve, by kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -39,20 +37,6 @@ impl MemoryUse {
 /// Bytes a vector reserves.
 fn cap<V>(v: &Vec<V>) -> usize {
     v.capacity() * size_of::<V>()
-}
-
-impl NeighborList {
-    /// Bytes the list reserves, the transpose scratch included.
-    pub(super) fn heap_bytes(&self) -> usize {
-        self.parts().map(cap).sum()
-    }
-}
-
-impl CellSort {
-    /// Bytes the sort reserves.
-    pub(super) fn heap_bytes(&self) -> usize {
-        self.parts().iter().map(|v| cap(v)).sum()
-    }
 }
 
 impl<T: Real> CpuSph<T> {

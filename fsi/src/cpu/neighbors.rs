@@ -63,10 +63,11 @@ pub struct TargetGroup<'a, T> {
 }
 
 impl NeighborList {
-    /// Every array the list reserves: the offsets, the entries' chunks and the transpose
-    /// scratch (see `memory`).
-    pub(super) fn parts(&self) -> impl Iterator<Item = &Vec<u32>> {
-        [&self.offsets, &self.count, &self.row_of].into_iter().chain(&self.chunks)
+    /// Bytes the list's arrays reserve: the offsets, the entries' chunks and the transpose
+    /// scratch.
+    pub(super) fn heap_bytes(&self) -> usize {
+        [&self.offsets, &self.count, &self.row_of].into_iter().chain(&self.chunks).map(|v| v.capacity()).sum::<usize>()
+            * size_of::<u32>()
     }
 
     /// Neighbours of `i`.
@@ -90,7 +91,7 @@ impl NeighborList {
             if k % CHUNK == 0 {
                 nl.chunks.push(Vec::new());
             }
-            nl.chunks.last_mut().expect("pushed above").extend_from_slice(row);
+            nl.chunks[k / CHUNK].extend_from_slice(row);
             nl.offsets.push(nl.offsets[k] + row.len() as u32);
         }
         nl
