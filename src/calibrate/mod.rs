@@ -31,7 +31,7 @@ use crate::input::{InputError, read_text};
 use crate::material::load_material_file;
 use crate::output::plot::{Figure, Panel, Series};
 use crate::output::write_figure;
-use fit::MohrCoulomb;
+use fit::{FitError, MohrCoulomb};
 use mcc::{CalibrateError, CriticalStateFit, IsotropicData, IsotropicFit};
 
 /// What `regolith calibrate mcc` reads.
@@ -202,11 +202,10 @@ pub fn isotropic_figure(d: &IsotropicData, f: &IsotropicFit) -> Figure {
 }
 
 /// `envelope.json`: the Mohr–Coulomb fit of triaxial failure stresses, with the field names of
-/// AGX's triaxial calibration output.
+/// A Mohr–Coulomb envelope with the failure stresses it was fitted to, under AGX's field
+/// names.
 #[derive(Clone, Debug, Serialize)]
-pub struct EnvelopeReport {
-    /// The data file.
-    pub file: String,
+pub struct Envelope {
     /// Cohesion c (Pa).
     pub c: f64,
     /// Friction angle φ (degrees).
@@ -223,6 +222,32 @@ pub struct EnvelopeReport {
     /// Vertical (major principal) stress at failure of each test (Pa).
     #[serde(rename = "verticalStress")]
     pub vertical_stress: Vec<f64>,
+}
+
+impl Envelope {
+    /// The envelope fitted to σ3 and σ1 at failure (Pa, compression positive), and the fit.
+    pub fn fit(s3: Vec<f64>, s1: Vec<f64>) -> Result<(Self, MohrCoulomb), FitError> {
+        let f = fit::mohr_coulomb(&s3, &s1)?;
+        let e = Self {
+            c: f.c,
+            phi: f.phi,
+            standard_error_c: f.se_c,
+            standard_error_phi: f.se_phi,
+            consolidation_stress: s3,
+            vertical_stress: s1,
+        };
+        Ok((e, f))
+    }
+}
+
+/// AGX's triaxial calibration output.
+#[derive(Clone, Debug, Serialize)]
+pub struct EnvelopeReport {
+    /// The data file.
+    pub file: String,
+    /// The envelope and the stresses it was fitted to.
+    #[serde(flatten)]
+    pub envelope: Envelope,
     /// Plots written.
     pub plots: Vec<String>,
 }
@@ -232,21 +257,16 @@ pub struct EnvelopeReport {
 /// `mohr.png`/`.svg` into `out`.
 pub fn calibrate_envelope(file: &Path, out: &Path) -> Result<EnvelopeReport, CommandError> {
     let (s3, s1) = mcc::read_failure_stresses(file)?;
-    let f = fit::mohr_coulomb(&s3, &s1).map_err(|source| CommandError::Data {
+    let (envelope, f) = Envelope::fit(s3, s1).map_err(|source| CommandError::Data {
         file: file.to_path_buf(),
         source: CalibrateError::Fit { what: "Mohr–Coulomb envelope", source },
     })?;
     std::fs::create_dir_all(out).map_err(|e| CommandError::Output(format!("cannot create {}: {e}", out.display())))?;
-    let plots =
-        write_figure(&mohr_figure(&s3, &s1, &f), out, "mohr").map_err(|e| CommandError::Output(e.to_string()))?;
+    let figure = mohr_figure(&envelope.consolidation_stress, &envelope.vertical_stress, &f);
+    let plots = write_figure(&figure, out, "mohr").map_err(|e| CommandError::Output(e.to_string()))?;
     let report = EnvelopeReport {
         file: file.display().to_string(),
-        c: f.c,
-        phi: f.phi,
-        standard_error_c: f.se_c,
-        standard_error_phi: f.se_phi,
-        consolidation_stress: s3,
-        vertical_stress: s1,
+        envelope,
         plots: plots.iter().map(|p| p.display().to_string()).collect(),
     };
     let json = out.join("envelope.json");

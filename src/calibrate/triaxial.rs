@@ -296,6 +296,26 @@ pub struct Sample {
     pub vertical: f64,
     /// Lateral stress: mean of the four side plates (Pa).
     pub lateral: f64,
+    /// The particles' own vertical stress: the volume-weighted mean of −σzz over the sample
+    /// (Pa). In equilibrium it equals the face stress; a gap between the two is stress the
+    /// walls carry that the soil does not (or the reverse).
+    pub bulk_vertical: f64,
+    /// The particles' own lateral stress, the volume-weighted mean of −(σxx + σyy)/2 (Pa).
+    pub bulk_lateral: f64,
+}
+
+/// Failure read on the particles' volume-mean stresses instead of the plates' (the same
+/// filter and rule): what the soil itself holds, without the boundary's share.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct BulkFailure {
+    /// How it was found.
+    pub kind: FailureKind,
+    /// Axial strain at failure.
+    pub strain: f64,
+    /// Vertical stress at failure (Pa, compression positive).
+    pub vertical: f64,
+    /// Lateral stress at failure (Pa).
+    pub lateral: f64,
 }
 
 /// One test.
@@ -326,6 +346,8 @@ pub struct TriaxialTest {
     pub vertical_at_failure: f64,
     /// Lateral (minor principal) stress at failure (Pa).
     pub lateral_at_failure: f64,
+    /// The same failure rule applied to the particles' own (volume-mean) stresses.
+    pub bulk: BulkFailure,
     /// Particles that left the sample's box by more than a spacing (0 in a good test).
     pub escaped: usize,
     /// Soil steps.
@@ -382,15 +404,32 @@ fn write_test(t: &TriaxialTest, dir: &Path) -> Result<Vec<PathBuf>, CommandError
     let out_err = |e: String| CommandError::Output(e);
     let csv = dir.join("series.csv");
     let text: String = std::iter::once(
-        "time,axial_strain,volumetric_strain,vertical_stress,lateral_stress,vertical_filtered,lateral_filtered\n"
+        "time,axial_strain,volumetric_strain,vertical_stress,lateral_stress,vertical_filtered,lateral_filtered,bulk_vertical_stress,bulk_lateral_stress\n"
             .to_string(),
     )
     .chain(t.series.iter().zip(&t.filtered).map(|(r, (fv, fh))| {
-        format!("{},{},{},{},{},{},{}\n", r.time, r.axial_strain, r.volumetric_strain, r.vertical, r.lateral, fv, fh)
+        format!(
+            "{},{},{},{},{},{},{},{},{}\n",
+            r.time, r.axial_strain, r.volumetric_strain, r.vertical, r.lateral, fv, fh, r.bulk_vertical, r.bulk_lateral
+        )
     }))
     .collect();
     std::fs::write(&csv, text).map_err(|e| out_err(format!("cannot write {}: {e}", csv.display())))?;
     write_figure(&stress_strain_figure(t), dir, "stress_strain").map_err(|e| out_err(e.to_string()))
+}
+
+/// The particles' volume-weighted mean stress, vertical and lateral (Pa, compression
+/// positive).
+fn bulk_stresses<T: Real>(sim: &Simulation<T>) -> [f64; 2] {
+    let f = &sim.system.fluid;
+    let (mut v, mut sz, mut sh) = (0.0, 0.0, 0.0);
+    for ((s, m), rho) in f.stresses().iter().zip(f.masses()).zip(f.densities()) {
+        let vol = m.as_f64() / rho.as_f64();
+        v += vol;
+        sz -= vol * s.zz.as_f64();
+        sh -= 0.5 * vol * (s.xx.as_f64() + s.yy.as_f64());
+    }
+    if v > 0.0 { [sz / v, sh / v] } else { [0.0; 2] }
 }
 
 /// The plates' surfaces facing the sample, per axis (min side, max side), m.
@@ -549,12 +588,15 @@ fn run_scene<T: Real>(
         let m = acc.map(|a| a / n_acc as f64);
         (acc, n_acc) = ([0.0; 6], 0);
         let axial_strain = 1.0 - size[2] / size_c[2];
+        let bulk = bulk_stresses(&sim);
         series.push(Sample {
             time: sim.time(),
             axial_strain,
             volumetric_strain: 1.0 - size[0] * size[1] * size[2] / volume_c,
             vertical: 0.5 * (m[4] + m[5]),
             lateral: 0.25 * (m[0] + m[1] + m[2] + m[3]),
+            bulk_vertical: bulk[0],
+            bulk_lateral: bulk[1],
         });
         if axial_strain >= s.max_strain {
             break;
@@ -572,24 +614,27 @@ fn run_scene<T: Real>(
             ),
         ))
     })?;
-    let fv = filter.filtfilt(&series.iter().map(|r| r.vertical).collect::<Vec<_>>());
-    let fh = filter.filtfilt(&series.iter().map(|r| r.lateral).collect::<Vec<_>>());
     let half = ((s.filter_wavelength / de).round() as usize).max(1);
     let floor = s.min_ratio * sigma0;
-    let peak = match s.failure {
-        FailureRule::Peak => first_peak(&fv, half, floor),
-        FailureRule::Plateau => None,
+    let pick = |vertical: &dyn Fn(&Sample) -> f64, lateral: &dyn Fn(&Sample) -> f64| {
+        let fv = filter.filtfilt(&series.iter().map(vertical).collect::<Vec<_>>());
+        let fh = filter.filtfilt(&series.iter().map(lateral).collect::<Vec<_>>());
+        let peak = match s.failure {
+            FailureRule::Peak => first_peak(&fv, half, floor),
+            FailureRule::Plateau => None,
+        };
+        let found = match peak {
+            Some(i) => Some((Failure { kind: FailureKind::Peak, index: i, value: fv[i] }, fh[i])),
+            None => plateau(&fv, PLATEAU_FRACTION).map(|(i, v)| {
+                let h = fh[i..].iter().sum::<f64>() / (fh.len() - i) as f64;
+                (Failure { kind: FailureKind::Plateau, index: i, value: v }, h)
+            }),
+        };
+        found.map(|f| (f, fv, fh)).ok_or_else(|| run_err("the shear phase recorded no sample".into()))
     };
-    let (failure, strain_f, v_f, h_f) = match peak {
-        Some(i) => (Failure { kind: FailureKind::Peak, index: i, value: fv[i] }, series[i].axial_strain, fv[i], fh[i]),
-        None => {
-            let Some((i, v)) = plateau(&fv, PLATEAU_FRACTION) else {
-                return Err(run_err("the shear phase recorded no sample".into()));
-            };
-            let h = fh[i..].iter().sum::<f64>() / (fh.len() - i) as f64;
-            (Failure { kind: FailureKind::Plateau, index: i, value: v }, series[i].axial_strain, v, h)
-        }
-    };
+    let ((failure, h_f), fv, fh) = pick(&|r| r.vertical, &|r| r.lateral)?;
+    let ((bulk_failure, bulk_h), _, _) = pick(&|r| r.bulk_vertical, &|r| r.bulk_lateral)?;
+    let (strain_f, v_f) = (series[failure.index].axial_strain, failure.value);
     // Particles that left the sample (through a gap between plates).
     let sf = surfaces(&sim, t);
     let f = &sim.system.fluid;
@@ -614,6 +659,12 @@ fn run_scene<T: Real>(
         strain_at_failure: strain_f,
         vertical_at_failure: v_f,
         lateral_at_failure: h_f,
+        bulk: BulkFailure {
+            strain: series[bulk_failure.index].axial_strain,
+            vertical: bulk_failure.value,
+            lateral: bulk_h,
+            kind: bulk_failure.kind,
+        },
         escaped,
         steps: f.steps(),
         wall_time_s: started.elapsed().as_secs_f64(),
@@ -705,6 +756,10 @@ pub struct TriaxialReport {
     /// Axial strain at failure of each test.
     #[serde(rename = "strainAtFailure")]
     pub strain_at_failure: Vec<f64>,
+    /// The envelope of the particles' own stresses at failure (the same rule on the
+    /// volume-mean stresses): the soil's strength without what the plates' markers add or
+    /// miss.
+    pub bulk: super::Envelope,
     /// The filter (AGX's `FilterParameters`): order, cutoff as a fraction of Nyquist, and the
     /// shortest strain wavelength kept.
     #[serde(rename = "FilterParameters")]
@@ -1121,6 +1176,10 @@ fn report(
     let (phi0, se_phi0) = mohr_coulomb_cohesionless(&s3, &s1).map_err(|e| {
         CommandError::Run(format!("the failure stresses σ3 = {s3:?} Pa, σ1 = {s1:?} Pa give no envelope: {e}"))
     })?;
+    let b3: Vec<f64> = tests.iter().map(|t| t.bulk.lateral).collect();
+    let b1: Vec<f64> = tests.iter().map(|t| t.bulk.vertical).collect();
+    let (bulk, _) = super::Envelope::fit(b3, b1)
+        .map_err(|e| CommandError::Run(format!("the particles' failure stresses give no envelope: {e}")))?;
     let de = s.strain_rate * SAMPLE_INTERVAL;
     let report = TriaxialReport {
         test: "triaxial_test",
@@ -1136,6 +1195,7 @@ fn report(
         consolidation_stress: s3,
         vertical_stress: s1,
         strain_at_failure: tests.iter().map(|t| t.strain_at_failure).collect(),
+        bulk,
         filter: FilterReport {
             filter_order: s.filter_order,
             critical_frequency: 2.0 * de / s.filter_wavelength,
@@ -1174,6 +1234,8 @@ pub fn stress_strain_figure(t: &TriaxialTest) -> Figure {
                 Series::points("lateral", pts(&|i| t.series[i].lateral)),
                 Series::line("vertical, filtered", pts(&|i| t.filtered[i].0)),
                 Series::line("lateral, filtered", pts(&|i| t.filtered[i].1)),
+                Series::line("vertical, particles' mean", pts(&|i| t.series[i].bulk_vertical)),
+                Series::line("lateral, particles' mean", pts(&|i| t.series[i].bulk_lateral)),
                 Series::points(
                     format!("failure ({:?}): σ1 = {:.3e} Pa", t.failure.kind, t.vertical_at_failure),
                     vec![(t.strain_at_failure, t.vertical_at_failure)],

@@ -23,7 +23,7 @@ fn se(x: Option<f64>) -> String {
 }
 
 pub(super) fn envelope(tests: PathBuf, out: PathBuf) -> Result<(), Failure> {
-    let r = calibrate_envelope(&tests, &out).map_err(failure)?;
+    let r = calibrate_envelope(&tests, &out).map_err(failure)?.envelope;
     println!(
         "Mohr–Coulomb envelope of {} tests: c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°",
         r.consolidation_stress.len(),
@@ -232,6 +232,13 @@ pub(super) fn triaxial_text(r: &TriaxialReport) -> String {
         "  through the origin (c = 0, a critical state): φ = {:.3}° ± {}°\n",
         r.phi_cohesionless,
         se(r.standard_error_phi_cohesionless)
+    ));
+    t.push_str(&format!(
+        "  on the particles' own (volume-mean) stresses, same rule: c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°\n",
+        r.bulk.c,
+        se(r.bulk.standard_error_c),
+        r.bulk.phi,
+        se(r.bulk.standard_error_phi)
     ));
     for x in &r.tests {
         t.push_str(&format!(
