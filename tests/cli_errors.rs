@@ -286,8 +286,12 @@ fn calibrate_triaxial_flags_and_materials_are_checked_before_running() {
         "--max-strain: must lie in (0, 0.3]",
     );
     assert_one_line_error(
-        &["calibrate", "triaxial", "--material", sand, "--filter-order", "0", "--out", &o],
-        "--filter-order",
+        &["calibrate", "triaxial", "--material", sand, "--filter", "butterworth", "--filter-order", "0", "--out", &o],
+        "--filter-order: must be 1 to 8",
+    );
+    assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--filter-order", "4", "--out", &o],
+        "--filter-order: applies to --filter butterworth only",
     );
     assert_one_line_error(
         &["calibrate", "triaxial", "--material", sand, "--target-phi", "95", "--out", &o],

@@ -82,19 +82,17 @@ fn a_cohesionless_drucker_prager_sample_fails_on_its_mohr_coulomb_envelope() {
     let r = run("dp30", &format!("{DP}friction_angle = 30.0\n"), &[10e3, 20e3, 30e3], FailureRule::Peak, 0.06, 0.2);
     assert!((r.phi - 30.0).abs() <= 1.5, "φ = {} against 30", r.phi);
     assert!((r.phi_cohesionless - 30.0).abs() <= 1.5, "φ (c = 0) = {} against 30", r.phi_cohesionless);
-    // The issue asks for c within one standard error of 0. Measured: 572 ± 186 Pa here (3.1
-    // standard errors), 1185 ± 726 Pa at 8 d0 and 1175 ± 808 Pa at half the strain rate: the
-    // peak rule picks the first yield bump of a noisy plateau (about ±3 % in σ1 from test to
-    // test), which three circles' standard error understates. The bound checked is a tenth
-    // of the lowest confining stress (1 kPa, which would add 3.5 kPa, 12 %, to the lowest
-    // test's σ1 of 30 kPa); the miss is reported in docs/calibration.md.
+    // The issue asks for c within one standard error of 0. On the plates: 524 ± 207 Pa (2.5
+    // standard errors; 572 ± 186 with the Butterworth filter, whose overshoot at the yield
+    // kink added a constant to every σ1). What is left is the plates' reading, not the soil
+    // (docs/calibration.md: marker corrugation and the plates' overlap at the edges). The
+    // bound checked on the plates is a tenth of the lowest confining stress (1 kPa, which
+    // would add 3.5 kPa, 12 %, to the lowest test's σ1 of 30 kPa).
     let se = r.standard_error_c.expect("three tests give a standard error");
     assert!(r.c.abs() <= 0.1 * 10e3, "c = {} Pa (standard error {se} Pa) against 0", r.c);
     assert!(r.tests.iter().all(|t| t.failure.kind == FailureKind::Peak));
     // The soil's own stresses (the particles' volume mean, same filter and rule) hold the
-    // issue's criterion: c within one standard error of 0 (measured −3 ± 9 Pa, φ 29.84°).
-    // The apparent cohesion above is the plates' reading of the yield transient, not the
-    // soil's strength (docs/calibration.md).
+    // issue's criterion: c within one standard error of 0 (measured 4 ± 75 Pa, φ 29.75°).
     let b = &r.bulk;
     let se_b = b.standard_error_c.expect("three tests give a standard error");
     assert!(b.c.abs() <= se_b, "particles' c = {} Pa against 0 ± {se_b} Pa", b.c);
@@ -113,7 +111,7 @@ fn a_cohesive_drucker_prager_sample_fails_on_its_mohr_coulomb_envelope() {
     );
     assert!((r.phi - 25.0).abs() <= 1.5, "φ = {} against 25", r.phi);
     assert!((r.c / 5000.0 - 1.0).abs() <= 0.15, "c = {} Pa against 5000", r.c);
-    // On the particles' own stresses: measured 5016 ± 20 Pa and 24.85°.
+    // On the particles' own stresses: measured 5003 ± 45 Pa and 24.77° (plates: 5193 Pa, 24.36°).
     assert!((r.bulk.phi - 25.0).abs() <= 1.5, "particles' φ = {} against 25", r.bulk.phi);
     assert!((r.bulk.c / 5000.0 - 1.0).abs() <= 0.15, "particles' c = {} Pa against 5000", r.bulk.c);
 }

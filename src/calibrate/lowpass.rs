@@ -1,11 +1,20 @@
-//! A zero-phase Butterworth low-pass filter, and the failure point of a triaxial test picked
-//! on the filtered vertical stress (AGX's rule: the first local maximum).
+//! Zero-phase low-pass filters, and the failure point of a triaxial test picked on the
+//! filtered vertical stress (AGX's rule: the first local maximum).
 //!
-//! The filter is the digital Butterworth of order n from the bilinear transform with a
-//! pre-warped cutoff, as cascaded second-order sections (and one first-order section for an
-//! odd order), run forward then backward (zero phase, squared magnitude response). The signal
-//! less its end-to-end straight line is extended at both ends by odd reflection and each pass
-//! starts from the steady state of its first sample, so a straight line passes unchanged.
+//! Two filters, with the same cutoff convention (the frequency, as a fraction of Nyquist, at
+//! which a sine keeps half its amplitude):
+//! - **Gaussian**: convolution with a normalised Gaussian kernel. Its kernel is positive, so
+//!   it cannot raise a concave stretch of a curve above the curve (Jensen): the kink where an
+//!   elastic–perfectly plastic sample yields comes out rounded, never overshooting.
+//! - **Butterworth** of order n (AGX's filter): the bilinear transform with a pre-warped
+//!   cutoff, as cascaded second-order sections (and one first-order section for an odd
+//!   order), run forward then backward (squared magnitude response). Its kernel has negative
+//!   lobes: at such a kink it overshoots by about 1.6 % of (slope jump × filter wavelength)
+//!   for order 4, the same amount whatever the stress level, which the first-peak rule turns
+//!   into an apparent cohesion (unit test below).
+//!
+//! Both take out the signal's end-to-end straight line and extend the rest at both ends by
+//! odd reflection, so a straight line passes unchanged and the ends carry no transient.
 
 use serde::{Deserialize, Serialize};
 
@@ -83,33 +92,118 @@ impl Butterworth {
         Ok(Self { sections, cutoff })
     }
 
-    /// Runs the filter forward and backward over `x` (zero phase). The straight line through
-    /// the first and last samples is taken out before and put back after, so a line passes
-    /// exactly and the ends carry no start-up transient; the rest is extended at both ends by
-    /// odd reflection over three cutoff periods (or the whole signal, if shorter).
+    /// Runs the filter forward and backward over `x` (zero phase), see [`zero_phase`].
     pub fn filtfilt(&self, x: &[f64]) -> Vec<f64> {
-        let n = x.len();
-        if n < 2 {
-            return x.to_vec();
+        zero_phase(x, (6.0 / self.cutoff).ceil() as usize, |y| {
+            for s in &self.sections {
+                s.run(y);
+            }
+            y.reverse();
+            for s in &self.sections {
+                s.run(y);
+            }
+            y.reverse();
+        })
+    }
+}
+
+/// Runs `filter` on `x` less the straight line through its first and last samples, extended
+/// at both ends by odd reflection over `pad` samples (or the whole signal, if shorter), and
+/// puts the line back: a line passes exactly and the ends carry no start-up transient.
+fn zero_phase(x: &[f64], pad: usize, filter: impl FnOnce(&mut Vec<f64>)) -> Vec<f64> {
+    let n = x.len();
+    if n < 2 {
+        return x.to_vec();
+    }
+    let slope = (x[n - 1] - x[0]) / (n - 1) as f64;
+    let line = |i: usize| x[0] + slope * i as f64;
+    let r: Vec<f64> = x.iter().enumerate().map(|(i, v)| v - line(i)).collect();
+    let pad = pad.min(n - 1);
+    // The residual is zero at both ends, so its odd reflection is minus its mirror image.
+    let mut y = Vec::with_capacity(n + 2 * pad);
+    y.extend((1..=pad).rev().map(|i| -r[i]));
+    y.extend_from_slice(&r);
+    y.extend((1..=pad).map(|i| -r[n - 1 - i]));
+    filter(&mut y);
+    y[pad..pad + n].iter().enumerate().map(|(i, v)| v + line(i)).collect()
+}
+
+/// A Gaussian low-pass: convolution with a normalised Gaussian kernel (zero phase, positive).
+#[derive(Clone, Debug)]
+pub struct Gaussian {
+    kernel: Vec<f64>,
+}
+
+impl Gaussian {
+    /// The kernel whose response `exp(−2π² σ² f²)` is 1/2 at `cutoff` × Nyquist (a sine there
+    /// keeps half its amplitude, as through the Butterworth filtfilt), truncated at ±4σ.
+    pub fn new(cutoff: f64) -> Result<Self, FilterError> {
+        if !(cutoff > 0.0 && cutoff < 1.0) {
+            return Err(FilterError::Cutoff(cutoff));
         }
-        let slope = (x[n - 1] - x[0]) / (n - 1) as f64;
-        let line = |i: usize| x[0] + slope * i as f64;
-        let r: Vec<f64> = x.iter().enumerate().map(|(i, v)| v - line(i)).collect();
-        let pad = ((6.0 / self.cutoff).ceil() as usize).min(n - 1);
-        // The residual is zero at both ends, so its odd reflection is minus its mirror image.
-        let mut y = Vec::with_capacity(n + 2 * pad);
-        y.extend((1..=pad).rev().map(|i| -r[i]));
-        y.extend_from_slice(&r);
-        y.extend((1..=pad).map(|i| -r[n - 1 - i]));
-        for s in &self.sections {
-            s.run(&mut y);
+        let f = 0.5 * cutoff;
+        let sigma = (std::f64::consts::LN_2 / 2.0).sqrt() / (std::f64::consts::PI * f);
+        let half = (4.0 * sigma).ceil() as i64;
+        let w: Vec<f64> = (-half..=half).map(|k| (-0.5 * (k as f64 / sigma).powi(2)).exp()).collect();
+        let total: f64 = w.iter().sum();
+        Ok(Self { kernel: w.into_iter().map(|v| v / total).collect() })
+    }
+
+    /// Filters `x` (zero phase), see [`zero_phase`].
+    pub fn filtfilt(&self, x: &[f64]) -> Vec<f64> {
+        let half = self.kernel.len() / 2;
+        zero_phase(x, half, |y| {
+            let src = y.clone();
+            for (i, v) in y.iter_mut().enumerate() {
+                let mut acc = 0.0;
+                let mut norm = 0.0;
+                for (k, w) in self.kernel.iter().enumerate() {
+                    // Samples past the padded ends drop out and the weights are renormalised.
+                    if let Some(u) = (i + k).checked_sub(half).and_then(|j| src.get(j)) {
+                        acc += w * u;
+                        norm += w;
+                    }
+                }
+                *v = acc / norm;
+            }
+        })
+    }
+}
+
+/// Which low-pass filter smooths a record before the failure pick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FilterKind {
+    /// A Gaussian kernel: no overshoot at a yield kink (the default).
+    Gaussian,
+    /// AGX's Butterworth of the given order, run forward and backward.
+    Butterworth,
+}
+
+/// A designed zero-phase low-pass of either kind.
+#[derive(Clone, Debug)]
+pub enum LowPass {
+    /// See [`Gaussian`].
+    Gaussian(Gaussian),
+    /// See [`Butterworth`].
+    Butterworth(Butterworth),
+}
+
+impl LowPass {
+    /// Designs the filter; `order` is the Butterworth's (a Gaussian has none).
+    pub fn new(kind: FilterKind, order: usize, cutoff: f64) -> Result<Self, FilterError> {
+        Ok(match kind {
+            FilterKind::Gaussian => Self::Gaussian(Gaussian::new(cutoff)?),
+            FilterKind::Butterworth => Self::Butterworth(Butterworth::new(order, cutoff)?),
+        })
+    }
+
+    /// Filters `x` with zero phase.
+    pub fn filtfilt(&self, x: &[f64]) -> Vec<f64> {
+        match self {
+            Self::Gaussian(g) => g.filtfilt(x),
+            Self::Butterworth(b) => b.filtfilt(x),
         }
-        y.reverse();
-        for s in &self.sections {
-            s.run(&mut y);
-        }
-        y.reverse();
-        y[pad..pad + n].iter().enumerate().map(|(i, v)| v + line(i)).collect()
     }
 }
 
@@ -206,8 +300,55 @@ mod tests {
         assert_eq!(at, Some(170));
     }
 
+    /// An elastic–perfectly plastic record (σ1 rising at E per unit strain from σ3 to 3 σ3,
+    /// then flat) at three confining stresses, sampled as the triaxial test samples it
+    /// (2e-4 strain apart, wavelength 1 % strain). The Butterworth's first peak stands a
+    /// constant 1.6 % of E × wavelength above the plateau at every stress (an apparent
+    /// cohesion of that over 2√Kp); the Gaussian's filtered record never rises above the
+    /// plateau, so whatever it picks is the plateau stress.
+    #[test]
+    fn a_butterworth_overshoots_a_yield_kink_by_a_constant_and_a_gaussian_does_not() {
+        let (e, de, wavelength): (f64, f64, f64) = (2e6, 2e-4, 0.01);
+        let cutoff = 2.0 * de / wavelength;
+        let half = (wavelength / de).round() as usize;
+        let butterworth = LowPass::new(FilterKind::Butterworth, 4, cutoff).expect("design");
+        let gaussian = LowPass::new(FilterKind::Gaussian, 0, cutoff).expect("design");
+        for s3 in [10e3, 20e3, 30e3] {
+            let x: Vec<f64> = (0..300).map(|i| (s3 + e * de * i as f64).min(3.0 * s3)).collect();
+            let yb = butterworth.filtfilt(&x);
+            let i = first_peak(&yb, half, 1.25 * s3).expect("the Butterworth rings into a peak");
+            let over = (yb[i] - 3.0 * s3) / (e * wavelength);
+            assert!((over - 0.0159).abs() < 0.0005, "σ3 = {s3}: overshoot {over} of E λ");
+            let yg = gaussian.filtfilt(&x);
+            assert!(yg.iter().zip(&x).all(|(g, v)| *g <= v + 1e-9 * s3), "σ3 = {s3}: Gaussian above the record");
+            // On the flat tail round-off may make a "peak"; it cannot stand above the plateau.
+            if let Some(i) = first_peak(&yg, half, 1.25 * s3) {
+                assert!(yg[i] <= 3.0 * s3 * (1.0 + 1e-9), "σ3 = {s3}: Gaussian peak {} above 3 σ3", yg[i]);
+            }
+            let (_, p) = plateau(&yg, 0.2).expect("a tail");
+            assert!((p / (3.0 * s3) - 1.0).abs() < 1e-9, "σ3 = {s3}: plateau {p}");
+        }
+    }
+
+    #[test]
+    fn a_gaussian_has_the_same_half_amplitude_cutoff_and_passes_a_line() {
+        let wn = 0.1;
+        let g = Gaussian::new(wn).expect("design");
+        let amp_at = |ratio: f64| {
+            let y = g.filtfilt(&sine(4000, 0.5 * wn * ratio, 1.0));
+            y[1000..3000].iter().fold(0.0f64, |m, v| m.max(v.abs()))
+        };
+        assert!((amp_at(1.0) - 0.5).abs() < 0.01, "{} at the cutoff", amp_at(1.0));
+        assert!(amp_at(4.0) < 1e-3, "{} two octaves above", amp_at(4.0));
+        let x: Vec<f64> = (0..200).map(|i| 3.0 + 0.25 * i as f64).collect();
+        for (a, b) in x.iter().zip(g.filtfilt(&x)) {
+            assert!((a - b).abs() < 1e-9 * (1.0 + a.abs()), "{a} became {b}");
+        }
+    }
+
     #[test]
     fn bad_designs_are_errors() {
+        assert_eq!(Gaussian::new(1.0).err(), Some(FilterError::Cutoff(1.0)));
         assert_eq!(Butterworth::new(0, 0.1).err(), Some(FilterError::Order));
         assert_eq!(Butterworth::new(4, 1.0).err(), Some(FilterError::Cutoff(1.0)));
         assert_eq!(Butterworth::new(4, 0.0).err(), Some(FilterError::Cutoff(0.0)));

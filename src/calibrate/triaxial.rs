@@ -14,8 +14,8 @@
 //! 2. **Shear.** The lateral plates keep the servo; the top and bottom plates approach at a
 //!    constant speed, the axial strain rate `strain_rate`, until `max_strain`.
 //! 3. **Failure** (see [`super::lowpass`]): the vertical stress is low-pass filtered (a
-//!    zero-phase Butterworth of `filter_order` whose cutoff wavelength is `filter_wavelength`
-//!    of axial strain) and the failure point is its first local maximum at which it exceeds
+//!    zero-phase Gaussian by default, or AGX's Butterworth of `filter_order`, whose cutoff
+//!    wavelength is `filter_wavelength` of axial strain) and the failure point is its first local maximum at which it exceeds
 //!    `min_ratio` × the confining stress, or, for `failure = plateau` (the default for MCC,
 //!    and the fallback when no peak comes before the end), the mean over the last fifth of
 //!    the test (the critical state).
@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 
 use super::CommandError;
 use super::fit::{MohrCoulomb, mohr_coulomb, mohr_coulomb_cohesionless};
-use super::lowpass::{Butterworth, Failure, FailureKind, first_peak, plateau};
+use super::lowpass::{Failure, FailureKind, FilterKind, LowPass, first_peak, plateau};
 use super::repose::material_table;
 use super::target::{
     JointRun, JointSettings, TargetRun, TargetSettings, calibrate_jointly, calibrate_to_target, write_calibrated,
@@ -96,6 +96,8 @@ pub struct TriaxialSettings {
     pub servo_crossings: f64,
     /// Failure rule.
     pub failure: FailureRule,
+    /// Low-pass filter of the failure pick.
+    pub filter: FilterKind,
     /// Order of the Butterworth filter.
     pub filter_order: usize,
     /// Shortest wavelength the filter keeps, in axial strain.
@@ -133,6 +135,7 @@ impl TriaxialSettings {
             tolerance: 0.01,
             servo_crossings: SERVO_CROSSINGS,
             failure: FailureRule::Peak,
+            filter: FilterKind::Gaussian,
             filter_order: 4,
             filter_wavelength: 0.01,
             min_ratio: 1.25,
@@ -605,7 +608,7 @@ fn run_scene<T: Real>(
     // Failure.
     let de = s.strain_rate * SAMPLE_INTERVAL;
     let cutoff = 2.0 * de / s.filter_wavelength;
-    let filter = Butterworth::new(s.filter_order, cutoff).map_err(|e| {
+    let filter = LowPass::new(s.filter, s.filter_order, cutoff).map_err(|e| {
         CommandError::Input(InputError::flag(
             "--strain-rate",
             format!(
@@ -784,8 +787,10 @@ pub struct TriaxialReport {
 #[derive(Clone, Debug, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct FilterReport {
-    /// Butterworth order.
-    pub filter_order: usize,
+    /// "gaussian" or "butterworth".
+    pub filter: FilterKind,
+    /// Butterworth order (`null` for a Gaussian).
+    pub filter_order: Option<usize>,
     /// Cutoff, fraction of the Nyquist frequency of the per-exchange record.
     pub critical_frequency: f64,
     /// Shortest wavelength kept, axial strain.
@@ -1197,7 +1202,8 @@ fn report(
         strain_at_failure: tests.iter().map(|t| t.strain_at_failure).collect(),
         bulk,
         filter: FilterReport {
-            filter_order: s.filter_order,
+            filter: s.filter,
+            filter_order: (s.filter == FilterKind::Butterworth).then_some(s.filter_order),
             critical_frequency: 2.0 * de / s.filter_wavelength,
             wavelength_strain: s.filter_wavelength,
             min_vert_stress_to_cons_stress_ratio: s.min_ratio,

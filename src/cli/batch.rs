@@ -9,7 +9,10 @@ use std::path::{Path, PathBuf};
 
 use clap::Parser;
 
-use super::{BatchRunArgs, Cli, Command, Failure, FailureArg, PlateArgs, Precision, StabilityArgs, TriaxialArgs};
+use super::{
+    BatchRunArgs, Cli, Command, Failure, FailureArg, FilterArg, PlateArgs, Precision, StabilityArgs, TriaxialArgs,
+};
+use crate::calibrate::lowpass::FilterKind;
 use crate::calibrate::plate::{PlateInputs, PlatePlan};
 use crate::calibrate::triaxial::{
     FailureRule, TriaxialInputs, TriaxialPlan, TriaxialSettings, default_rule, envelope_of_recorded,
@@ -38,7 +41,21 @@ impl TriaxialArgs {
             Some(FailureArg::Plateau) => FailureRule::Plateau,
             None => default_rule(&self.material)?,
         };
-        s.filter_order = self.filter_order;
+        s.filter = match self.filter {
+            FilterArg::Gaussian => FilterKind::Gaussian,
+            FilterArg::Butterworth => FilterKind::Butterworth,
+        };
+        match (s.filter, self.filter_order) {
+            (FilterKind::Butterworth, Some(n)) => s.filter_order = n,
+            (FilterKind::Gaussian, Some(_)) => {
+                return Err(InputError::flag(
+                    "--filter-order",
+                    "applies to --filter butterworth only (a Gaussian has no order)",
+                )
+                .into());
+            }
+            (_, None) => {}
+        }
         s.filter_wavelength = self.filter_wavelength;
         s.servo_crossings = self.servo_crossings;
         s.precision = match self.precision {

@@ -321,6 +321,15 @@ pub enum CalibrateCommand {
     },
 }
 
+/// The low-pass filter of a triaxial test's failure pick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FilterArg {
+    /// A Gaussian kernel (positive: it never overshoots).
+    Gaussian,
+    /// AGX's Butterworth, forward and backward.
+    Butterworth,
+}
+
 /// How a triaxial test's failure point is picked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum FailureArg {
@@ -393,9 +402,14 @@ pub struct TriaxialArgs {
     /// plateau (the mean over the last fifth) [default: plateau for MCC, else peak].
     #[arg(long, value_enum)]
     pub failure: Option<FailureArg>,
-    /// Order of the Butterworth filter.
-    #[arg(long, value_name = "N", default_value_t = 4)]
-    pub filter_order: usize,
+    /// Low-pass filter of the failure pick: a Gaussian kernel (no overshoot where the sample
+    /// yields) or AGX's Butterworth (which overshoots a sharp yield by about 1.6 % of the
+    /// elastic slope × the wavelength, read as cohesion).
+    #[arg(long, value_enum, default_value = "gaussian")]
+    pub filter: FilterArg,
+    /// Order of the Butterworth filter [default: 4; only with --filter butterworth].
+    #[arg(long, value_name = "N")]
+    pub filter_order: Option<usize>,
     /// Shortest wavelength the filter keeps (axial strain).
     #[arg(long, value_name = "STRAIN", default_value_t = 0.01)]
     pub filter_wavelength: f64,
