@@ -201,7 +201,6 @@ pub fn isotropic_figure(d: &IsotropicData, f: &IsotropicFit) -> Figure {
     }
 }
 
-/// `envelope.json`: the Mohr–Coulomb fit of triaxial failure stresses, with the field names of
 /// A Mohr–Coulomb envelope with the failure stresses it was fitted to, under AGX's field
 /// names.
 #[derive(Clone, Debug, Serialize)]
@@ -240,6 +239,7 @@ impl Envelope {
     }
 }
 
+/// `envelope.json`: the Mohr–Coulomb fit of triaxial failure stresses, with the field names of
 /// AGX's triaxial calibration output.
 #[derive(Clone, Debug, Serialize)]
 pub struct EnvelopeReport {

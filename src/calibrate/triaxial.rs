@@ -15,10 +15,11 @@
 //!    constant speed, the axial strain rate `strain_rate`, until `max_strain`.
 //! 3. **Failure** (see [`super::lowpass`]): the vertical stress is low-pass filtered (a
 //!    zero-phase Gaussian by default, or AGX's Butterworth of `filter_order`, whose cutoff
-//!    wavelength is `filter_wavelength` of axial strain) and the failure point is its first local maximum at which it exceeds
-//!    `min_ratio` × the confining stress, or, for `failure = plateau` (the default for MCC,
-//!    and the fallback when no peak comes before the end), the mean over the last fifth of
-//!    the test (the critical state).
+//!    wavelength is `filter_wavelength` of axial strain) and the failure point is its first
+//!    local maximum at which it exceeds `min_ratio` × the confining stress, or, for
+//!    `failure = plateau` (the default for MCC, and the fallback when no peak comes before
+//!    the end), the mean over the last fifth of the test (the critical state). The same rule
+//!    on the particles' volume-mean stresses gives the soil's own envelope (`bulk`).
 //!
 //! The failure stresses of all tests give the Mohr–Coulomb envelope with standard errors
 //! ([`super::fit::mohr_coulomb`]).
@@ -300,8 +301,9 @@ pub struct Sample {
     /// Lateral stress: mean of the four side plates (Pa).
     pub lateral: f64,
     /// The particles' own vertical stress: the volume-weighted mean of −σzz over the sample
-    /// (Pa). In equilibrium it equals the face stress; a gap between the two is stress the
-    /// walls carry that the soil does not (or the reverse).
+    /// (Pa). Walls that hold a uniformly stressed sample read 0.985 of it (the kernel's
+    /// lattice sum at h = 1.2 d0); a larger gap is load the plates' markers take or give
+    /// elsewhere (docs/calibration.md).
     pub bulk_vertical: f64,
     /// The particles' own lateral stress, the volume-weighted mean of −(σxx + σyy)/2 (Pa).
     pub bulk_lateral: f64,
