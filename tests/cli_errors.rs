@@ -294,6 +294,10 @@ fn calibrate_triaxial_flags_and_materials_are_checked_before_running() {
         "--filter-order: applies to --filter butterworth only",
     );
     assert_one_line_error(
+        &["calibrate", "triaxial", "--material", sand, "--match", "plates", "--out", &o],
+        "--match: applies to --target-phi or --target-c only",
+    );
+    assert_one_line_error(
         &["calibrate", "triaxial", "--material", sand, "--target-phi", "95", "--out", &o],
         "--target-phi",
     );

@@ -43,6 +43,7 @@ fn run(
         tolerance_phi: 0.5,
         target_c: None,
         tolerance_c: None,
+        matching: regolith::calibrate::triaxial::EnvelopeSource::Particles,
     })
     .unwrap_or_else(|e| panic!("{name}: {e}"));
     for t in &r.tests {

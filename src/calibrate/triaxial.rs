@@ -76,6 +76,18 @@ pub enum FailureRule {
     Plateau,
 }
 
+/// Which envelope a calibration loop matches to its targets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EnvelopeSource {
+    /// The particles' own stresses (`bulk`): the soil's strength, what a scene run with the
+    /// calibrated material gets. The default.
+    Particles,
+    /// The plates' stresses (AGX's measurement), which carry the plates' reading error too
+    /// (docs/calibration.md).
+    Plates,
+}
+
 /// Settings of the test (the command's flags).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TriaxialSettings {
@@ -706,6 +718,8 @@ pub struct TriaxialInputs {
     /// error if that is larger; `None`: [`C_TOLERANCE_FRACTION`] of the target, at least
     /// [`C_TOLERANCE_MIN`].
     pub tolerance_c: Option<f64>,
+    /// The envelope the loop matches to the targets.
+    pub matching: EnvelopeSource,
 }
 
 /// Default time constant of the plates' servo, in P-wave crossings of the sample's longest
@@ -781,6 +795,8 @@ pub struct TriaxialReport {
     pub calibration_parameter: Option<&'static str>,
     /// The joint loop (`--target-phi` with `--target-c`).
     pub joint_calibration: Option<JointRun>,
+    /// The envelope the loop matched (`null` without a loop).
+    pub calibration_envelope: Option<EnvelopeSource>,
     /// The calibrated material file, when the loop converged.
     pub calibrated_material: Option<String>,
 }
@@ -986,21 +1002,38 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
         }
         let dir = inp.out.join(format!("iteration_{k}"));
         let (tests, fit) = run_all(&m, s, &dir, inp.jobs, inp.resume)?;
+        let measured = match inp.matching {
+            EnvelopeSource::Plates => fit,
+            EnvelopeSource::Particles => {
+                let (b3, b1) = tests.iter().map(|t| (t.bulk.lateral, t.bulk.vertical)).unzip();
+                super::Envelope::fit(b3, b1)
+                    .map_err(|e| CommandError::Run(format!("the particles' failure stresses give no envelope: {e}")))?
+                    .1
+            }
+        };
         let typed: Vec<String> = set.iter().map(|(key, v)| format!("{key} = {v:.4}")).collect();
         eprintln!(
-            "  {}: sample φ = {:.2}° ± {:.2}°, c = {:.1} ± {:.1} Pa",
+            "  {}: sample φ = {:.2}° ± {:.2}°, c = {:.1} ± {:.1} Pa (on the {})",
             typed.join(", "),
-            fit.phi,
-            fit.se_phi.unwrap_or(0.0),
-            fit.c,
-            fit.se_c.unwrap_or(0.0)
+            measured.phi,
+            measured.se_phi.unwrap_or(0.0),
+            measured.c,
+            measured.se_c.unwrap_or(0.0),
+            match inp.matching {
+                EnvelopeSource::Particles => "particles",
+                EnvelopeSource::Plates => "plates",
+            }
         );
         last = Some((m, tests, fit, dir));
-        Ok(fit)
+        Ok(measured)
+    };
+    let on = match inp.matching {
+        EnvelopeSource::Particles => "the particles' own stresses",
+        EnvelopeSource::Plates => "the plates' stresses",
     };
     let why = |what: &str| {
         format!(
-            "`regolith calibrate triaxial {what}`: set so that the SPH sample's\n# triaxial envelope meets the target (see triaxial.json)"
+            "`regolith calibrate triaxial {what}`: set so that the SPH sample's\n# triaxial envelope on {on} meets the target (see triaxial.json)"
         )
     };
     let (calibration, written) = match targets {
@@ -1214,6 +1247,7 @@ fn report(
         tests,
         settings: s.clone(),
         plots: plots.iter().map(|p| p.display().to_string()).collect(),
+        calibration_envelope: (calibration.is_some() || joint_calibration.is_some()).then_some(inp.matching),
         calibration,
         calibration_parameter,
         joint_calibration,

@@ -10,12 +10,13 @@ use std::path::{Path, PathBuf};
 use clap::Parser;
 
 use super::{
-    BatchRunArgs, Cli, Command, Failure, FailureArg, FilterArg, PlateArgs, Precision, StabilityArgs, TriaxialArgs,
+    BatchRunArgs, Cli, Command, Failure, FailureArg, FilterArg, MatchArg, PlateArgs, Precision, StabilityArgs,
+    TriaxialArgs,
 };
 use crate::calibrate::lowpass::FilterKind;
 use crate::calibrate::plate::{PlateInputs, PlatePlan};
 use crate::calibrate::triaxial::{
-    FailureRule, TriaxialInputs, TriaxialPlan, TriaxialSettings, default_rule, envelope_of_recorded,
+    EnvelopeSource, FailureRule, TriaxialInputs, TriaxialPlan, TriaxialSettings, default_rule, envelope_of_recorded,
 };
 use crate::input::InputError;
 use crate::study::stability::{StabilityOptions, StabilityPlan};
@@ -71,6 +72,13 @@ impl TriaxialArgs {
             target_phi: self.target_phi,
             tolerance_phi: self.tolerance,
             target_c: self.target_c,
+            matching: match self.matching {
+                Some(_) if self.target_phi.is_none() && self.target_c.is_none() => {
+                    return Err(InputError::flag("--match", "applies to --target-phi or --target-c only").into());
+                }
+                Some(MatchArg::Plates) => EnvelopeSource::Plates,
+                Some(MatchArg::Particles) | None => EnvelopeSource::Particles,
+            },
             tolerance_c: self.tolerance_c,
         })
     }

@@ -321,6 +321,15 @@ pub enum CalibrateCommand {
     },
 }
 
+/// The envelope a triaxial calibration loop matches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MatchArg {
+    /// The particles' own stresses.
+    Particles,
+    /// The plates' stresses.
+    Plates,
+}
+
 /// The low-pass filter of a triaxial test's failure pick.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum FilterArg {
@@ -436,6 +445,11 @@ pub struct TriaxialArgs {
     /// error if that is larger [default: 5 % of the target, at least 50 Pa].
     #[arg(long, value_name = "PA")]
     pub tolerance_c: Option<f64>,
+    /// The envelope the loop matches to the targets: the particles' own stresses (the soil's
+    /// strength) or the plates' (AGX's reading, with its error) [default: particles; only
+    /// with --target-phi or --target-c].
+    #[arg(long = "match", value_enum, value_name = "ENVELOPE")]
+    pub matching: Option<MatchArg>,
     /// Output folder.
     #[arg(long, value_name = "DIR", default_value = "out/calibrate-triaxial")]
     pub out: PathBuf,
