@@ -92,7 +92,8 @@ impl Butterworth {
         Ok(Self { sections, cutoff })
     }
 
-    /// Runs the filter forward and backward over `x` (zero phase), see [`zero_phase`].
+    /// Runs the filter forward and backward over `x` (zero phase), the end-to-end line taken
+    /// out and the rest extended by odd reflection (see the module's notes).
     pub fn filtfilt(&self, x: &[f64]) -> Vec<f64> {
         zero_phase(x, (6.0 / self.cutoff).ceil() as usize, |y| {
             for s in &self.sections {
@@ -149,7 +150,8 @@ impl Gaussian {
         Ok(Self { kernel: w.into_iter().map(|v| v / total).collect() })
     }
 
-    /// Filters `x` (zero phase), see [`zero_phase`].
+    /// Filters `x` (zero phase), the end-to-end line taken out and the rest extended by odd
+    /// reflection (see the module's notes).
     pub fn filtfilt(&self, x: &[f64]) -> Vec<f64> {
         let half = self.kernel.len() / 2;
         zero_phase(x, half, |y| {
