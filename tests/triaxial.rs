@@ -69,8 +69,8 @@ fn run(
     }
     eprintln!("{name}: c = {:.1} ± {:?} Pa, φ = {:.2} ± {:?}°", r.c, r.standard_error_c, r.phi, r.standard_error_phi);
     eprintln!(
-        "{name}: particles: c = {:.1} ± {:?} Pa, φ = {:.2} ± {:?}°",
-        r.bulk.c, r.bulk.standard_error_c, r.bulk.phi, r.bulk.standard_error_phi
+        "{name}: particles: c = {:.1} ± {:?} Pa, φ = {:.2} ± {:?}°, through the origin {:.2}°",
+        r.bulk.c, r.bulk.standard_error_c, r.bulk.phi, r.bulk.standard_error_phi, r.bulk_phi_cohesionless
     );
     assert!(dir.join("out").join("triaxial.json").is_file());
     r
@@ -119,14 +119,18 @@ fn a_cohesive_drucker_prager_sample_fails_on_its_mohr_coulomb_envelope() {
 
 #[test]
 fn a_cam_clay_sample_reaches_its_critical_state_friction_angle() {
-    // M = 1.2: φ_cs = asin(3 · 1.2 / 7.2) = 30°. Consolidated from zero stress, the sample is
-    // normally consolidated at σ0 and hardens towards the critical state; by 12–15 % axial
-    // strain it is there (the plateau is the mean over the last fifth). E sets the moduli
+    // M = 1.2: φ_cs = asin(3 · 1.2 / 7.2) = 30°. Started at σ0 with OCR 1, the sample is
+    // normally consolidated and hardens towards the critical state (the plateau is the mean
+    // over the last fifth of the test). E sets the moduli
     // clamp (Chrono's safeguard) and with it the time step; the critical state does not
     // depend on it. Two confining stresses: the angle needs no standard error here.
     let clay = "model = \"mcc\"\ndensity = 1800.0\nyoungs_modulus = 2.0e6\npoisson_ratio = 0.3\nmcc_m = 1.2\nmcc_kappa = 0.02\nmcc_lambda = 0.12\nmcc_v_lambda = 2.4\nocr = 1.0\n";
-    let r = run("mcc_m12", clay, &[10e3, 20e3], FailureRule::Plateau, 0.15, 0.5);
+    // 30 % strain (the plates' limit): at 15 % the sample is still hardening, and its
+    // particles read 27.74° (the plates 29.11°); at 30 % the particles read 29.91° and the
+    // plates 29.10°.
+    let r = run("mcc_m12", clay, &[10e3, 20e3], FailureRule::Plateau, 0.3, 0.5);
     // The critical state line passes through the origin: the envelope without cohesion.
     assert!((r.phi_cohesionless - 30.0).abs() <= 1.5, "φ_cs = {} against 30", r.phi_cohesionless);
+    assert!((r.bulk_phi_cohesionless - 30.0).abs() <= 1.5, "particles' φ_cs = {} against 30", r.bulk_phi_cohesionless);
     assert!(r.tests.iter().all(|t| t.failure.kind == FailureKind::Plateau));
 }

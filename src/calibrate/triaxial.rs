@@ -779,6 +779,13 @@ pub struct TriaxialReport {
     /// volume-mean stresses): the soil's strength without what the plates' markers add or
     /// miss.
     pub bulk: super::Envelope,
+    /// The particles' cohesionless envelope through the origin (degrees; for Cam Clay the
+    /// critical-state angle to compare with asin(3M / (6 + M))).
+    #[serde(rename = "bulk_phi_c0")]
+    pub bulk_phi_cohesionless: f64,
+    /// Its standard error (degrees); `null` with one test.
+    #[serde(rename = "bulk_standardError_phi_c0")]
+    pub bulk_standard_error_phi_cohesionless: Option<f64>,
     /// The filter (AGX's `FilterParameters`): order, cutoff as a fraction of Nyquist, and the
     /// shortest strain wavelength kept.
     #[serde(rename = "FilterParameters")]
@@ -1218,8 +1225,13 @@ fn report(
     })?;
     let b3: Vec<f64> = tests.iter().map(|t| t.bulk.lateral).collect();
     let b1: Vec<f64> = tests.iter().map(|t| t.bulk.vertical).collect();
-    let (bulk, _) = super::Envelope::fit(b3, b1)
-        .map_err(|e| CommandError::Run(format!("the particles' failure stresses give no envelope: {e}")))?;
+    let no_envelope = |e: super::fit::FitError| {
+        CommandError::Run(format!(
+            "the particles' failure stresses σ3 = {b3:?} Pa, σ1 = {b1:?} Pa give no envelope: {e}"
+        ))
+    };
+    let (bulk_phi0, bulk_se_phi0) = mohr_coulomb_cohesionless(&b3, &b1).map_err(no_envelope)?;
+    let (bulk, _) = super::Envelope::fit(b3.clone(), b1.clone()).map_err(no_envelope)?;
     let de = s.strain_rate * SAMPLE_INTERVAL;
     let report = TriaxialReport {
         test: "triaxial_test",
@@ -1236,6 +1248,8 @@ fn report(
         vertical_stress: s1,
         strain_at_failure: tests.iter().map(|t| t.strain_at_failure).collect(),
         bulk,
+        bulk_phi_cohesionless: bulk_phi0,
+        bulk_standard_error_phi_cohesionless: bulk_se_phi0,
         filter: FilterReport {
             filter: s.filter,
             filter_order: (s.filter == FilterKind::Butterworth).then_some(s.filter_order),

@@ -234,11 +234,13 @@ pub(super) fn triaxial_text(r: &TriaxialReport) -> String {
         se(r.standard_error_phi_cohesionless)
     ));
     t.push_str(&format!(
-        "  on the particles' own (volume-mean) stresses, same rule: c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°\n",
+        "  on the particles' own (volume-mean) stresses, same rule: c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°; through the origin φ = {:.3}° ± {}°\n",
         r.bulk.c,
         se(r.bulk.standard_error_c),
         r.bulk.phi,
-        se(r.bulk.standard_error_phi)
+        se(r.bulk.standard_error_phi),
+        r.bulk_phi_cohesionless,
+        se(r.bulk_standard_error_phi_cohesionless)
     ));
     for x in &r.tests {
         t.push_str(&format!(
