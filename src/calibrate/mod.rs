@@ -225,15 +225,15 @@ pub struct Envelope {
 
 impl Envelope {
     /// The envelope fitted to σ3 and σ1 at failure (Pa, compression positive), and the fit.
-    pub fn fit(s3: Vec<f64>, s1: Vec<f64>) -> Result<(Self, MohrCoulomb), FitError> {
-        let f = fit::mohr_coulomb(&s3, &s1)?;
+    pub fn fit(s3: &[f64], s1: &[f64]) -> Result<(Self, MohrCoulomb), FitError> {
+        let f = fit::mohr_coulomb(s3, s1)?;
         let e = Self {
             c: f.c,
             phi: f.phi,
             standard_error_c: f.se_c,
             standard_error_phi: f.se_phi,
-            consolidation_stress: s3,
-            vertical_stress: s1,
+            consolidation_stress: s3.to_vec(),
+            vertical_stress: s1.to_vec(),
         };
         Ok((e, f))
     }
@@ -257,7 +257,7 @@ pub struct EnvelopeReport {
 /// `mohr.png`/`.svg` into `out`.
 pub fn calibrate_envelope(file: &Path, out: &Path) -> Result<EnvelopeReport, CommandError> {
     let (s3, s1) = mcc::read_failure_stresses(file)?;
-    let (envelope, f) = Envelope::fit(s3, s1).map_err(|source| CommandError::Data {
+    let (envelope, f) = Envelope::fit(&s3, &s1).map_err(|source| CommandError::Data {
         file: file.to_path_buf(),
         source: CalibrateError::Fit { what: "Mohr–Coulomb envelope", source },
     })?;

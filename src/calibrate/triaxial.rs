@@ -1012,10 +1012,9 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
         let measured = match inp.matching {
             EnvelopeSource::Plates => fit,
             EnvelopeSource::Particles => {
-                let (b3, b1) = tests.iter().map(|t| (t.bulk.lateral, t.bulk.vertical)).unzip();
-                super::Envelope::fit(b3, b1)
+                let (b3, b1): (Vec<f64>, Vec<f64>) = tests.iter().map(|t| (t.bulk.lateral, t.bulk.vertical)).unzip();
+                mohr_coulomb(&b3, &b1)
                     .map_err(|e| CommandError::Run(format!("the particles' failure stresses give no envelope: {e}")))?
-                    .1
             }
         };
         let typed: Vec<String> = set.iter().map(|(key, v)| format!("{key} = {v:.4}")).collect();
@@ -1231,7 +1230,7 @@ fn report(
         ))
     };
     let (bulk_phi0, bulk_se_phi0) = mohr_coulomb_cohesionless(&b3, &b1).map_err(no_envelope)?;
-    let (bulk, _) = super::Envelope::fit(b3.clone(), b1.clone()).map_err(no_envelope)?;
+    let (bulk, _) = super::Envelope::fit(&b3, &b1).map_err(no_envelope)?;
     let de = s.strain_rate * SAMPLE_INTERVAL;
     let report = TriaxialReport {
         test: "triaxial_test",
