@@ -81,6 +81,19 @@ pub trait SphSolver<T: Real>: Send {
             Some(_) => Err(SolverError::Setup(format!("the {} backend has no active domains", self.backend()))),
         }
     }
+    /// Records, from the next step on, each marker's diagonal pair moment beside its force
+    /// (see [`CpuSph::record_marker_moments`]). Backends that cannot refuse.
+    fn record_marker_moments(&mut self) -> Result<(), SolverError> {
+        Err(SolverError::Setup(format!(
+            "the {} backend does not record marker moments; use backend = \"cpu\"",
+            self.backend()
+        )))
+    }
+    /// Each marker's diagonal pair moment of the last step (N m, original order); empty unless
+    /// recorded.
+    fn marker_moments(&self) -> &[Vec3<T>] {
+        &[]
+    }
     /// How soil slides along the markers of each owner (`contact[0]` the fixed walls,
     /// `contact[k + 1]` body k; owners past the end are rough), with each marker's wall normal
     /// into the soil (original order; zero or missing: rough). Backends without smooth or
@@ -243,6 +256,12 @@ impl<T: Real> SphSolver<T> for CpuSph<T> {
         normals: &[[f64; 3]],
     ) -> Result<(), SolverError> {
         CpuSph::set_wall_contact(self, contact, normals)
+    }
+    fn record_marker_moments(&mut self) -> Result<(), SolverError> {
+        CpuSph::record_marker_moments(self)
+    }
+    fn marker_moments(&self) -> &[Vec3<T>] {
+        CpuSph::marker_moments(self)
     }
     fn place_bodies(&mut self, bodies: &[BodyMarkers<'_>], states: &[BodyState]) {
         place_on_host(self, bodies, states);

@@ -2,9 +2,16 @@
 //!
 //! A box-shaped sample (`width` × `width` × `height`) stands between six rigid plates, each a
 //! box of BCE markers with free-slip (smooth) contact, so the sample deforms homogeneously as
-//! between lubricated platens. Gravity is off. Each plate's stress is its soil force over the
-//! sample's current face area; the sample's faces lie half a spacing inside the plates'
-//! surfaces (the markers sit on the surfaces, the soil's first layer one spacing in).
+//! between lubricated platens. Gravity is off. Each face's stress is the soil's normal force
+//! on the markers beyond it over the sample's current face area; the sample's faces lie half a
+//! spacing inside the plates' surfaces (the markers sit on the surfaces, the soil's first
+//! layer one spacing in). But BCE markers are not a frictionless wall: beside a plate, soil
+//! layers push on one another through the plate's markers too, so the side plates carry part
+//! of the axial load, more as the sample shortens past their marker rows. The stresses the
+//! envelope is fitted to are therefore the load the soil itself carries, from the plates'
+//! forces and the particles they act on (`mean_stresses`, the Love–Weber mean stress of the
+//! sample). The faces' force over area alone (AGX's reading) gives a second envelope,
+//! `faces`; the particles' own volume-mean stresses a third, `bulk`.
 //!
 //! 1. **Consolidation.** Every plate is servo-controlled towards the confining stress σ0: it
 //!    moves outward at `v = (σ − σ0) L / (2 M τ)` (L the sample's length along the plate's
@@ -83,8 +90,7 @@ pub enum EnvelopeSource {
     /// The particles' own stresses (`bulk`): the soil's strength, what a scene run with the
     /// calibrated material gets. The default.
     Particles,
-    /// The plates' stresses (AGX's measurement), which carry the plates' reading error too
-    /// (docs/calibration.md).
+    /// The load the soil carries, from the plates' forces (the report's main envelope).
     Plates,
 }
 
@@ -308,10 +314,16 @@ pub struct Sample {
     pub axial_strain: f64,
     /// Volumetric strain since the end of consolidation (compaction positive).
     pub volumetric_strain: f64,
-    /// Vertical stress: mean of top and bottom (Pa, compression positive).
+    /// Vertical stress (Pa, compression positive): the mean vertical load the soil carries,
+    /// from the plates' forces on its particles (`mean_stresses`).
     pub vertical: f64,
-    /// Lateral stress: mean of the four side plates (Pa).
+    /// Lateral stress (Pa): the mean of the x and y loads the soil carries.
     pub lateral: f64,
+    /// The faces' normal force over area alone, top and bottom (Pa): AGX's reading, which
+    /// counts the load the side plates' markers carry too.
+    pub face_vertical: f64,
+    /// The four side faces' normal force over area (Pa): what the servo holds at σ0.
+    pub face_lateral: f64,
     /// The particles' own vertical stress: the volume-weighted mean of −σzz over the sample
     /// (Pa). Walls that hold a uniformly stressed sample read 0.985 of it (the kernel's
     /// lattice sum at h = 1.2 d0); a larger gap is load the plates' markers take or give
@@ -321,10 +333,10 @@ pub struct Sample {
     pub bulk_lateral: f64,
 }
 
-/// Failure read on the particles' volume-mean stresses instead of the plates' (the same
-/// filter and rule): what the soil itself holds, without the boundary's share.
+/// A failure point read on one of the other stress records (the same filter and rule): the
+/// particles' volume-mean stresses, or the faces' normal force over area alone.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
-pub struct BulkFailure {
+pub struct FailureStresses {
     /// How it was found.
     pub kind: FailureKind,
     /// Axial strain at failure.
@@ -364,7 +376,10 @@ pub struct TriaxialTest {
     /// Lateral (minor principal) stress at failure (Pa).
     pub lateral_at_failure: f64,
     /// The same failure rule applied to the particles' own (volume-mean) stresses.
-    pub bulk: BulkFailure,
+    pub bulk: FailureStresses,
+    /// The same failure rule applied to the faces' normal force over area alone (AGX's
+    /// reading).
+    pub faces: FailureStresses,
     /// Particles that left the sample's box by more than a spacing (0 in a good test).
     pub escaped: usize,
     /// Soil steps.
@@ -421,13 +436,23 @@ fn write_test(t: &TriaxialTest, dir: &Path) -> Result<Vec<PathBuf>, CommandError
     let out_err = |e: String| CommandError::Output(e);
     let csv = dir.join("series.csv");
     let text: String = std::iter::once(
-        "time,axial_strain,volumetric_strain,vertical_stress,lateral_stress,vertical_filtered,lateral_filtered,bulk_vertical_stress,bulk_lateral_stress\n"
+        "time,axial_strain,volumetric_strain,vertical_stress,lateral_stress,vertical_filtered,lateral_filtered,face_vertical_stress,face_lateral_stress,bulk_vertical_stress,bulk_lateral_stress\n"
             .to_string(),
     )
     .chain(t.series.iter().zip(&t.filtered).map(|(r, (fv, fh))| {
         format!(
-            "{},{},{},{},{},{},{},{},{}\n",
-            r.time, r.axial_strain, r.volumetric_strain, r.vertical, r.lateral, fv, fh, r.bulk_vertical, r.bulk_lateral
+            "{},{},{},{},{},{},{},{},{},{},{}\n",
+            r.time,
+            r.axial_strain,
+            r.volumetric_strain,
+            r.vertical,
+            r.lateral,
+            fv,
+            fh,
+            r.face_vertical,
+            r.face_lateral,
+            r.bulk_vertical,
+            r.bulk_lateral
         )
     }))
     .collect();
@@ -480,6 +505,53 @@ fn face_stresses<T: Real>(sim: &Simulation<T>, sf: [[f64; 2]; 3], size: [f64; 3]
     })
 }
 
+/// The sample's mean normal stresses (x, y, z; Pa, compression positive) from the plates'
+/// forces on the soil, normal and tangential: the mean over the sample of the load its
+/// particles pass to one another across each plane, by their equilibrium.
+///
+/// With no gravity and no inertia the particles' pair forces balance the walls' forces
+/// `F_a` on them, so their moment `Σ_pairs r ∘ f` equals `−Σ_a x_a ∘ F_a`, which the markers'
+/// forces and pair moments give ([`regolith_fsi::SphSolver::marker_moments`]). A pair's
+/// `r_i f_i` is its force integrated over the planes normal to `i` between its two particles,
+/// so the moment is the load the soil carries across those planes, integrated from the lowest
+/// particle centre to the highest: divided by the face area and that span (the sample's
+/// length less a spacing), it is the mean stress the soil carries.
+///
+/// Each force is taken at the particle it acts on, not at the marker. Beside a wall, BCE
+/// markers pass load from one soil layer to the next (a marker pushes the particles above it
+/// up and those below it down, with no net force of its own): that load bypasses the soil,
+/// and the faces' force over area counts it while this moment does not. That share, and the
+/// tangential pull of the markers' rows as the sample shortens past them, is what a lab
+/// corrects a load cell's reading for as side friction (docs/calibration.md).
+fn mean_stresses<T: Real>(sim: &Simulation<T>, sf: [[f64; 2]; 3], size: [f64; 3], d0: f64) -> [f64; 3] {
+    let f = &sim.system.fluid;
+    let mid = sf.map(|[lo, hi]| 0.5 * (lo + hi));
+    let mut moment = [0.0; 3];
+    for ((x, fm), q) in f.marker_positions().iter().zip(f.marker_forces()).zip(f.marker_moments()) {
+        let (x, fm, q) = (
+            [x.x.as_f64(), x.y.as_f64(), x.z.as_f64()],
+            [fm.x.as_f64(), fm.y.as_f64(), fm.z.as_f64()],
+            [q.x.as_f64(), q.y.as_f64(), q.z.as_f64()],
+        );
+        for a in 0..3 {
+            moment[a] += (x[a] - mid[a]) * fm[a] + q[a];
+        }
+    }
+    std::array::from_fn(|a| moment[a] / (size[(a + 1) % 3] * size[(a + 2) % 3] * (size[a] - d0)))
+}
+
+/// What one exchange of the test reads.
+struct Reading {
+    /// The sample's size (m).
+    size: [f64; 3],
+    /// Each face's stress (Pa), in the order of [`PLATES`].
+    faces: [f64; 6],
+    /// The exchange's length (s).
+    dt: f64,
+    /// The soil's mean load per area along x, y, z (Pa), `mean_stresses`.
+    soil: [f64; 3],
+}
+
 fn run_scene<T: Real>(
     scene: &crate::scene::Scene,
     s: &TriaxialSettings,
@@ -505,6 +577,7 @@ fn run_scene<T: Real>(
         let mut contact = vec![WallContact::Rough];
         contact.extend([WallContact::Smooth; 6]);
         sim.system.fluid.set_wall_contact(&contact, &normals).map_err(|e| run_err(e.to_string()))?;
+        sim.system.fluid.record_marker_moments().map_err(|e| run_err(e.to_string()))?;
     }
     let f = &sim.system.fluid;
     let particles = f.len();
@@ -551,18 +624,23 @@ fn run_scene<T: Real>(
             sim.set_body_velocity(b, lin, [0.0; 3]);
         }
     };
-    let exchange = |sim: &mut Simulation<T>| -> Result<([f64; 3], [f64; 6], f64), CommandError> {
+    let exchange = |sim: &mut Simulation<T>| -> Result<Reading, CommandError> {
         let t0 = sim.time();
         sim.step_max(None).map_err(|e| run_err(e.to_string()))?;
         let sf = surfaces(sim, t);
         let size = size_of(sf);
-        Ok((size, face_stresses(sim, sf, size, d0), sim.time() - t0))
+        Ok(Reading {
+            size,
+            faces: face_stresses(sim, sf, size, d0),
+            dt: sim.time() - t0,
+            soil: mean_stresses(sim, sf, size, d0),
+        })
     };
     // Consolidation.
     let max_time = 40.0 * tau;
     let mut history: Vec<(f64, [f64; 6])> = Vec::new();
     let consolidated = loop {
-        let (size, st, dt) = exchange(&mut sim)?;
+        let Reading { size, faces: st, dt, .. } = exchange(&mut sim)?;
         history.push((sim.time(), st));
         let now = sim.time();
         let first = history.partition_point(|(time, _)| *time < now - window_time);
@@ -590,12 +668,16 @@ fn run_scene<T: Real>(
     let v_axial = 0.5 * s.strain_rate * size_c[2];
     let mut series = Vec::new();
     let (mut size, mut st, mut dt) = (size_c, [sigma0; 6], 0.0);
-    let (mut acc, mut n_acc, mut next) = ([0.0f64; 6], 0usize, sim.time() + SAMPLE_INTERVAL);
+    let (mut acc, mut acc_mean, mut n_acc, mut next) = ([0.0f64; 6], [0.0f64; 3], 0usize, sim.time() + SAMPLE_INTERVAL);
     loop {
         servo(&mut sim, &st, size, dt, Some(v_axial));
-        (size, st, dt) = exchange(&mut sim)?;
+        let soil;
+        Reading { size, faces: st, dt, soil } = exchange(&mut sim)?;
         for k in 0..6 {
             acc[k] += st[k];
+        }
+        for k in 0..3 {
+            acc_mean[k] += soil[k];
         }
         n_acc += 1;
         if sim.time() < next - 1e-12 {
@@ -603,15 +685,18 @@ fn run_scene<T: Real>(
         }
         next += SAMPLE_INTERVAL;
         let m = acc.map(|a| a / n_acc as f64);
-        (acc, n_acc) = ([0.0; 6], 0);
+        let mean = acc_mean.map(|a| a / n_acc as f64);
+        (acc, acc_mean, n_acc) = ([0.0; 6], [0.0; 3], 0);
         let axial_strain = 1.0 - size[2] / size_c[2];
         let bulk = bulk_stresses(&sim);
         series.push(Sample {
             time: sim.time(),
             axial_strain,
             volumetric_strain: 1.0 - size[0] * size[1] * size[2] / volume_c,
-            vertical: 0.5 * (m[4] + m[5]),
-            lateral: 0.25 * (m[0] + m[1] + m[2] + m[3]),
+            vertical: mean[2],
+            lateral: 0.5 * (mean[0] + mean[1]),
+            face_vertical: 0.5 * (m[4] + m[5]),
+            face_lateral: 0.25 * (m[0] + m[1] + m[2] + m[3]),
             bulk_vertical: bulk[0],
             bulk_lateral: bulk[1],
         });
@@ -651,6 +736,7 @@ fn run_scene<T: Real>(
     };
     let ((failure, h_f), fv, fh) = pick(&|r| r.vertical, &|r| r.lateral)?;
     let ((bulk_failure, bulk_h), _, _) = pick(&|r| r.bulk_vertical, &|r| r.bulk_lateral)?;
+    let ((face_failure, face_h), _, _) = pick(&|r| r.face_vertical, &|r| r.face_lateral)?;
     let (strain_f, v_f) = (series[failure.index].axial_strain, failure.value);
     // Particles that left the sample (through a gap between plates).
     let sf = surfaces(&sim, t);
@@ -676,11 +762,17 @@ fn run_scene<T: Real>(
         strain_at_failure: strain_f,
         vertical_at_failure: v_f,
         lateral_at_failure: h_f,
-        bulk: BulkFailure {
+        bulk: FailureStresses {
             strain: series[bulk_failure.index].axial_strain,
             vertical: bulk_failure.value,
             lateral: bulk_h,
             kind: bulk_failure.kind,
+        },
+        faces: FailureStresses {
+            strain: series[face_failure.index].axial_strain,
+            vertical: face_failure.value,
+            lateral: face_h,
+            kind: face_failure.kind,
         },
         escaped,
         steps: f.steps(),
@@ -779,6 +871,9 @@ pub struct TriaxialReport {
     /// volume-mean stresses): the soil's strength without what the plates' markers add or
     /// miss.
     pub bulk: super::Envelope,
+    /// The envelope of the faces' normal force over area alone at failure (AGX's reading,
+    /// without the side plates' share of the axial load).
+    pub faces: super::Envelope,
     /// The particles' cohesionless envelope through the origin (degrees; for Cam Clay the
     /// critical-state angle to compare with asin(3M / (6 + M))).
     #[serde(rename = "bulk_phi_c0")]
@@ -1035,7 +1130,7 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
     };
     let on = match inp.matching {
         EnvelopeSource::Particles => "the particles' own stresses",
-        EnvelopeSource::Plates => "the plates' stresses",
+        EnvelopeSource::Plates => "the soil's load from the plates' forces",
     };
     let why = |what: &str| {
         format!(
@@ -1231,6 +1326,11 @@ fn report(
     };
     let (bulk_phi0, bulk_se_phi0) = mohr_coulomb_cohesionless(&b3, &b1).map_err(no_envelope)?;
     let (bulk, _) = super::Envelope::fit(&b3, &b1).map_err(no_envelope)?;
+    let f3: Vec<f64> = tests.iter().map(|t| t.faces.lateral).collect();
+    let f1: Vec<f64> = tests.iter().map(|t| t.faces.vertical).collect();
+    let (faces, _) = super::Envelope::fit(&f3, &f1).map_err(|e| {
+        CommandError::Run(format!("the faces' failure stresses σ3 = {f3:?} Pa, σ1 = {f1:?} Pa give no envelope: {e}"))
+    })?;
     let de = s.strain_rate * SAMPLE_INTERVAL;
     let report = TriaxialReport {
         test: "triaxial_test",
@@ -1247,6 +1347,7 @@ fn report(
         vertical_stress: s1,
         strain_at_failure: tests.iter().map(|t| t.strain_at_failure).collect(),
         bulk,
+        faces,
         bulk_phi_cohesionless: bulk_phi0,
         bulk_standard_error_phi_cohesionless: bulk_se_phi0,
         filter: FilterReport {
@@ -1289,6 +1390,7 @@ pub fn stress_strain_figure(t: &TriaxialTest) -> Figure {
                 Series::points("lateral", pts(&|i| t.series[i].lateral)),
                 Series::line("vertical, filtered", pts(&|i| t.filtered[i].0)),
                 Series::line("lateral, filtered", pts(&|i| t.filtered[i].1)),
+                Series::line("vertical, faces alone", pts(&|i| t.series[i].face_vertical)),
                 Series::line("vertical, particles' mean", pts(&|i| t.series[i].bulk_vertical)),
                 Series::line("lateral, particles' mean", pts(&|i| t.series[i].bulk_lateral)),
                 Series::points(

@@ -217,7 +217,7 @@ pub(super) fn plate_text(r: &PlateCalibration) -> String {
 /// The envelope and every test, as printed.
 pub(super) fn triaxial_text(r: &TriaxialReport) -> String {
     let mut t = format!(
-        "triaxial envelope of {} tests: c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°{}\n",
+        "triaxial envelope of {} tests (the plates' forces, their side-friction share included): c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°{}\n",
         r.tests.len(),
         r.c,
         se(r.standard_error_c),
@@ -233,14 +233,18 @@ pub(super) fn triaxial_text(r: &TriaxialReport) -> String {
         r.phi_cohesionless,
         se(r.standard_error_phi_cohesionless)
     ));
+    let envelope = |e: &crate::calibrate::Envelope| {
+        format!("c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°", e.c, se(e.standard_error_c), e.phi, se(e.standard_error_phi))
+    };
     t.push_str(&format!(
-        "  on the particles' own (volume-mean) stresses, same rule: c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°; through the origin φ = {:.3}° ± {}°\n",
-        r.bulk.c,
-        se(r.bulk.standard_error_c),
-        r.bulk.phi,
-        se(r.bulk.standard_error_phi),
+        "  on the particles' own (volume-mean) stresses, same rule: {}; through the origin φ = {:.3}° ± {}°\n",
+        envelope(&r.bulk),
         r.bulk_phi_cohesionless,
         se(r.bulk_standard_error_phi_cohesionless)
+    ));
+    t.push_str(&format!(
+        "  on the faces' normal force over area alone (AGX's reading, which also counts the load the plates' markers pass between soil layers): {}\n",
+        envelope(&r.faces)
     ));
     for x in &r.tests {
         t.push_str(&format!(

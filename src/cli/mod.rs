@@ -326,7 +326,7 @@ pub enum CalibrateCommand {
 pub enum MatchArg {
     /// The particles' own stresses.
     Particles,
-    /// The plates' stresses.
+    /// The soil's load from the plates' forces (the report's main envelope).
     Plates,
 }
 

@@ -282,15 +282,7 @@ mod tests {
     /// markers) sum what the pair-at-a-time loop sums, to f32 round-off; `contact` exactly.
     fn blocks_match_scalar<K: Kernel<f32>>() {
         let h = 0.012_f32;
-        let c = PairConsts {
-            h,
-            inv_h: 1.0 / h,
-            alpha: K::alpha(h),
-            support2: 4.0 * h * h,
-            visc_alpha: 0.5,
-            eta2: 0.01 * h * h,
-            gravity: Vec3::zero(),
-        };
+        let c = PairConsts::for_test::<K>(h);
         let mut state = 7_u64;
         let mut contact_seen = [false; 2];
         for (n_soil, n_markers) in [(0, 0), (1, 0), (15, 3), (16, 16), (17, 1), (77, 20), (40, 0)] {

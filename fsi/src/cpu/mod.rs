@@ -104,6 +104,9 @@ pub struct CpuSph<T: Real> {
     /// where none was given (the marker stays rough).
     m_normal: Vec<Vec3<T>>,
     m_force: Vec<Vec3<T>>,
+    /// Diagonal pair moment of each marker's force (original order), while recorded
+    /// ([`CpuSph::record_marker_moments`]); empty otherwise.
+    m_moment: Vec<Vec3<T>>,
     // Markers inside the grid, walls then bodies, each in cell order (index k ↔ original
     // ms_orig[k]).
     ms_pos: Vec<Vec3<T>>,
@@ -114,6 +117,8 @@ pub struct CpuSph<T: Real> {
     touched: Vec<u32>,
     m_packed: Vec<Packed<T>>,
     ms_force: Vec<Vec3<T>>,
+    /// `m_moment` of the touched markers (empty unless recorded).
+    ms_moment: Vec<Vec3<T>>,
     /// Marker kinematics changed since the markers were last sorted.
     markers_dirty: bool,
     m_volume: T,
@@ -297,12 +302,14 @@ impl<T: Real> CpuSph<T> {
             owner_mu: Vec::new(),
             m_normal: Vec::new(),
             m_force: vec![Vec3::zero(); nm],
+            m_moment: Vec::new(),
             ms_pos: Vec::new(),
             ms_vel: Vec::new(),
             ms_acc: Vec::new(),
             touched: Vec::new(),
             m_packed: Vec::new(),
             ms_force: Vec::new(),
+            ms_moment: Vec::new(),
             markers_dirty: true,
             m_volume: T::of(cfg.spacing.powi(3)),
             ref_rho: T::of(ref_rho),
@@ -584,6 +591,26 @@ impl<T: Real> CpuSph<T> {
     /// order.
     pub fn marker_forces(&self) -> &[Vec3<T>] {
         &self.m_force
+    }
+    /// Records from the next step on, beside each marker's force, the diagonal of its pair
+    /// moment `Σ_a (x_a − x_m) ∘ f_am` over the soil particles `a` that push it (N m, original
+    /// order, [`CpuSph::marker_moments`]): what a mean stress from the walls' forces needs to
+    /// take each force at the particle it acts on rather than at the marker. Dry soil only:
+    /// a wet scene's marker forces carry the pore pressure's terms too, and are refused.
+    pub fn record_marker_moments(&mut self) -> Result<(), SolverError> {
+        if self.wet.is_some() {
+            return Err(SolverError::Setup(
+                "marker moments are recorded for dry soil only (the scene has water)".into(),
+            ));
+        }
+        self.m_moment = vec![Vec3::zero(); self.m_pos.len()];
+        self.ms_moment = vec![Vec3::zero(); self.ms_force.len()];
+        Ok(())
+    }
+    /// The diagonal pair moment of each marker's force during the last step's final stage
+    /// (N m, original order; see [`CpuSph::record_marker_moments`]); empty unless recorded.
+    pub fn marker_moments(&self) -> &[Vec3<T>] {
+        &self.m_moment
     }
     /// Prescribed marker kinematics (original order), for markers that belong to moving
     /// bodies. Taking it marks every marker, fixed walls included, for re-sorting at the next
@@ -958,6 +985,9 @@ impl<T: Real> CpuSph<T> {
         self.nl_ms.transpose_compact(&mut self.nl_sm, self.ms_pos.len(), &mut self.touched);
         self.m_packed.resize(self.touched.len(), Packed::default());
         self.ms_force.resize(self.touched.len(), Vec3::zero());
+        if !self.m_moment.is_empty() {
+            self.ms_moment.resize(self.touched.len(), Vec3::zero());
+        }
         if self.wet.is_some() {
             self.m_packed_w.resize(self.touched.len(), Packed::default());
             self.m_pore.resize(self.touched.len(), wet::MarkerPore::default());
@@ -1055,6 +1085,7 @@ impl<T: Real> CpuSph<T> {
                     &self.m_packed,
                     &self.nl_ms,
                     &mut self.ms_force,
+                    &mut self.ms_moment,
                 );
             } else {
                 rates::marker_forces::<T, K, false>(
@@ -1063,6 +1094,7 @@ impl<T: Real> CpuSph<T> {
                     &self.m_packed,
                     &self.nl_ms,
                     &mut self.ms_force,
+                    &mut self.ms_moment,
                 );
             }
         }
@@ -1337,6 +1369,12 @@ impl<T: Real> CpuSph<T> {
         let mut total = [0.0; 3];
         for f in self.m_force.iter_mut() {
             *f = Vec3::zero();
+        }
+        if !self.m_moment.is_empty() {
+            self.m_moment.fill(Vec3::zero());
+            for (k, &sorted) in self.touched.iter().enumerate() {
+                self.m_moment[self.ms_orig[sorted as usize] as usize] = self.ms_moment[k];
+            }
         }
         for (k, &sorted) in self.touched.iter().enumerate() {
             let o = self.ms_orig[sorted as usize] as usize;

@@ -65,6 +65,22 @@ pub(crate) struct PairConsts<T> {
     pub gravity: Vec3<T>,
 }
 
+#[cfg(test)]
+impl<T: Real> PairConsts<T> {
+    /// The constants the pair-loop tests use: support 2h, α = 0.5, η² = 0.01 h², no gravity.
+    pub(crate) fn for_test<K: Kernel<T>>(h: T) -> Self {
+        Self {
+            h,
+            inv_h: T::one() / h,
+            alpha: K::alpha(h),
+            support2: T::of(4.0) * h * h,
+            visc_alpha: T::of(0.5),
+            eta2: T::of(0.01) * h * h,
+            gravity: Vec3::zero(),
+        }
+    }
+}
+
 /// The soil state a stage reads.
 pub(crate) struct SoilView<'a, T> {
     pub pos: &'a [Vec3<T>],
@@ -409,21 +425,43 @@ impl<T: Real> PairSums<T> {
 /// Force (N) on each touched marker (row `k` of `nl_ms`, record `markers[k]`) from the soil:
 /// minus the same pair terms the soil particles receive. Only the particles of `soil` (the
 /// awake ones) count: frozen soil listed in `nl_ms` neither pushes nor is pushed.
+///
+/// With `moments` as long as `out` (else empty: not recorded), row `k` also gets the diagonal
+/// of the pairs' moment `Σ_a (x_a − x_k) ∘ f_ak` (N m), `f_ak` the force of particle `a` on
+/// the marker: with it the moment of the walls' forces about the soil particles they act on,
+/// `Σ_a x_a ∘ F_a = −Σ_k (x_k ∘ f_k + moment_k)`, needs only per-marker sums.
 pub(crate) fn marker_forces<T: Real, K: Kernel<T>, const VISC: bool>(
     c: &PairConsts<T>,
     soil: &[Packed<T>],
     markers: &[Packed<T>],
     nl_ms: &NeighborList,
     out: &mut [Vec3<T>],
+    moments: &mut [Vec3<T>],
 ) {
-    out.par_iter_mut().enumerate().for_each(|(k, out)| {
+    if moments.len() != out.len() {
+        out.par_iter_mut().enumerate().for_each(|(k, out)| {
+            let pw = &markers[k];
+            let mut f = Vec3::zero();
+            for &a in nl_ms.of(k) {
+                let Some(pa) = soil.get(a as usize) else { continue };
+                f -= marker_pair::<T, K, VISC>(c, pa, pw);
+            }
+            *out = f;
+        });
+        return;
+    }
+    out.par_iter_mut().zip(moments.par_iter_mut()).enumerate().for_each(|(k, (out, moment))| {
         let pw = &markers[k];
-        let mut f = Vec3::zero();
+        let (mut f, mut q) = (Vec3::zero(), Vec3::zero());
         for &a in nl_ms.of(k) {
             let Some(pa) = soil.get(a as usize) else { continue };
-            f -= marker_pair::<T, K, VISC>(c, pa, pw);
+            let fa = marker_pair::<T, K, VISC>(c, pa, pw);
+            let r = pa.x - pw.x;
+            f -= fa;
+            q -= Vec3::new(r.x * fa.x, r.y * fa.y, r.z * fa.z);
         }
         *out = f;
+        *moment = q;
     });
 }
 
@@ -443,4 +481,64 @@ pub(crate) fn marker_pair<T: Real, K: Kernel<T>, const VISC: bool>(
     let gw = r * K::grad_factor(r2.sqrt(), c.inv_h, c.alpha);
     let vab = pa.v - pw.v;
     pair_term::<T, VISC>(c, pa, pw, r, r2, gw, vab) * (pa.mass * pw.mass)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernel::WendlandC2;
+
+    /// A deterministic pseudo-random number in [-1, 1).
+    fn rnd(state: &mut u64) -> f64 {
+        *state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        ((*state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
+    /// A marker's pair moment is the sum over its particles of (their position − its
+    /// position) ∘ (each one's force on it): checked against the forces of each pair alone
+    /// (one-particle lists), and the forces are those of the loop without moments.
+    #[test]
+    fn a_markers_moment_takes_each_force_at_its_particle() {
+        let h = 0.012;
+        let c = PairConsts::<f64>::for_test::<WendlandC2>(h);
+        let mut state = 11_u64;
+        let mut record = |scale: f64| {
+            let mut v3 = |s: f64| Vec3::new(rnd(&mut state) * s, rnd(&mut state) * s, rnd(&mut state) * s);
+            let (x, v) = (v3(scale), v3(0.3));
+            let s = Sym3::new(-1.0, -1.2, -0.8, 0.1, -0.05, 0.2) * (1e4 / (1700.0 * 1700.0));
+            Packed { x, v, s, vol: 1e-6, mass: 1.7e-3, rho: 1700.0, cs: 50.0 }
+        };
+        let soil: Vec<Packed<f64>> = (0..40).map(|_| record(2.0 * h)).collect();
+        let markers: Vec<Packed<f64>> = (0..5).map(|_| record(0.5 * h)).collect();
+        let all: Vec<Vec<u32>> = vec![(0..soil.len() as u32).collect(); markers.len()];
+        let nl = NeighborList::from_rows(&all);
+        let (mut f, mut q, mut plain) = (vec![Vec3::zero(); 5], vec![Vec3::zero(); 5], vec![Vec3::zero(); 5]);
+        marker_forces::<f64, WendlandC2, true>(&c, &soil, &markers, &nl, &mut f, &mut q);
+        marker_forces::<f64, WendlandC2, true>(&c, &soil, &markers, &nl, &mut plain, &mut []);
+        assert_eq!(f, plain);
+        for (k, m) in markers.iter().enumerate() {
+            let mut expect = Vec3::zero();
+            let mut touching = 0;
+            for (a, p) in soil.iter().enumerate() {
+                let mut rows = vec![Vec::new(); markers.len()];
+                rows[k].push(a as u32);
+                let mut fa = vec![Vec3::zero(); markers.len()];
+                marker_forces::<f64, WendlandC2, true>(
+                    &c,
+                    &soil,
+                    &markers,
+                    &NeighborList::from_rows(&rows),
+                    &mut fa,
+                    &mut [],
+                );
+                let r = p.x - m.x;
+                expect += Vec3::new(r.x * fa[k].x, r.y * fa[k].y, r.z * fa[k].z);
+                touching += usize::from(fa[k].norm2() > 0.0);
+            }
+            assert!(touching > 5, "marker {k} touches {touching} particles");
+            let scale = expect.norm2().sqrt();
+            assert!(scale > 0.0);
+            assert!((q[k] - expect).norm2().sqrt() <= 1e-12 * scale, "marker {k}: {:?} against {:?}", q[k], expect);
+        }
+    }
 }
