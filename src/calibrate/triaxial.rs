@@ -1386,8 +1386,8 @@ pub fn stress_strain_figure(t: &TriaxialTest) -> Figure {
             x_log: false,
             y_log: false,
             series: vec![
-                Series::points("vertical", pts(&|i| t.series[i].vertical)),
-                Series::points("lateral", pts(&|i| t.series[i].lateral)),
+                Series::points("vertical, soil's load", pts(&|i| t.series[i].vertical)),
+                Series::points("lateral, soil's load", pts(&|i| t.series[i].lateral)),
                 Series::line("vertical, filtered", pts(&|i| t.filtered[i].0)),
                 Series::line("lateral, filtered", pts(&|i| t.filtered[i].1)),
                 Series::line("vertical, faces alone", pts(&|i| t.series[i].face_vertical)),

@@ -217,7 +217,7 @@ pub(super) fn plate_text(r: &PlateCalibration) -> String {
 /// The envelope and every test, as printed.
 pub(super) fn triaxial_text(r: &TriaxialReport) -> String {
     let mut t = format!(
-        "triaxial envelope of {} tests (the plates' forces, their side-friction share included): c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°{}\n",
+        "triaxial envelope of {} tests (the soil's load, from the plates' forces on its particles): c = {:.4e} ± {} Pa, φ = {:.3}° ± {}°{}\n",
         r.tests.len(),
         r.c,
         se(r.standard_error_c),
