@@ -63,6 +63,13 @@ pub struct ReposeSettings {
     /// Precision of the run.
     #[serde(serialize_with = "precision_name")]
     pub precision: Precision,
+    /// Overrides of the test's scene keys (`--set`), applied after the command writes it.
+    #[serde(serialize_with = "sets_text")]
+    pub sets: Vec<(String, toml::Value)>,
+}
+
+fn sets_text<S: serde::Serializer>(sets: &[(String, toml::Value)], s: S) -> Result<S::Ok, S::Error> {
+    s.collect_seq(sets.iter().map(|(k, v)| format!("{k}={v}")))
 }
 
 fn precision_name<S: serde::Serializer>(p: &Precision, s: S) -> Result<S::Ok, S::Error> {
@@ -86,6 +93,7 @@ impl ReposeSettings {
             cells: 15,
             cell_radius: spacing,
             precision: Precision::F32,
+            sets: Vec::new(),
         }
     }
 
@@ -417,7 +425,7 @@ pub fn run_test(material: &toml::Table, s: &ReposeSettings, dir: &Path) -> Resul
     };
     write("tube.obj", &tube_obj(s.radius, s.radius + 2.0 * s.spacing, s.height + 2.0 * s.spacing, TUBE_SEGMENTS))?;
     let scene_path = write("scene.toml", &scene_text(material, s)?)?;
-    let scene = load_scene(&scene_path, &[])?;
+    let scene = load_scene(&scene_path, &s.sets)?;
     match s.precision {
         Precision::F32 => run_scene::<f32>(&scene, s),
         Precision::F64 => run_scene::<f64>(&scene, s),
@@ -667,7 +675,8 @@ pub fn calibrate_repose(inp: &ReposeInputs) -> Result<ReposeReport, CommandError
             &inp.material,
             &[("friction_angle", phi)],
             &format!(
-                "`regolith calibrate repose --target-angle {target}`: friction_angle set so that the SPH pile stands\n# at the target angle (see repose.json)"
+                "`regolith calibrate repose --target-angle {target}{}`: friction_angle set so that the SPH pile stands\n# at the target angle (see repose.json)",
+                inp.settings.sets.iter().map(|(k, v)| format!(" --set {k}={v}")).collect::<String>()
             ),
             &inp.out.join("material.toml"),
         )?),

@@ -285,6 +285,10 @@ pub enum CalibrateCommand {
         /// slices' standard error if that is larger.
         #[arg(long, value_name = "DEG", default_value_t = ANGLE_TOLERANCE)]
         tolerance: f64,
+        /// Override a key of the test's scene, e.g. `--set sph.artificial_viscosity=0`
+        /// (repeatable; the scene is written into the output folder).
+        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = crate::scene::parse_set)]
+        sets: Vec<(String, toml::Value)>,
         /// Output folder.
         #[arg(long, value_name = "DIR", default_value = "out/calibrate-repose")]
         out: PathBuf,
@@ -907,10 +911,12 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                     precision,
                     target_angle,
                     tolerance,
+                    sets,
                     out,
                 },
         } => {
             let mut s = ReposeSettings::for_radius(radius);
+            s.sets = sets;
             if let Some(h) = height {
                 s.height = h;
             }
