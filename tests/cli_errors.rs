@@ -262,6 +262,10 @@ fn calibrate_repose_flags_and_materials_are_checked_before_running() {
         &["calibrate", "repose", "--material", sand, "--set", "sph.artificial_viscosity=-1", "--out", &o],
         "sph.artificial_viscosity`: must be in [0, 5] (got -1) (value from --set)",
     );
+    assert_one_line_error(
+        &["calibrate", "repose", "--material", sand, "--set", "sph.spacing=0.02", "--out", &o],
+        "--set: `sph.spacing` is the test's own (sph.spacing): set it with --spacing",
+    );
     let bad = material(
         "repose_bad.toml",
         "model = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 1e6\npoisson_ratio = 0.7\nfriction_angle = 30\n",

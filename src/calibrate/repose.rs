@@ -37,6 +37,17 @@ use crate::sim::Simulation;
 use regolith_fsi::Real;
 use regolith_fsi::config::WallContact;
 
+/// Scene keys the test sets from its own flags or builds itself, which `--set` may not
+/// change (the analysis would not follow): key and where it comes from.
+const OWN_KEYS: [(&str, &str); 6] = [
+    ("sph.spacing", "--spacing"),
+    ("simulation.precision", "--precision"),
+    ("materials", "the material file (--material)"),
+    ("container", "--radius and --height"),
+    ("soil_blocks", "--radius and --height"),
+    ("bodies", "--radius, --height and --lift-speed"),
+];
+
 /// Segments of the cylinder's polygonal mesh.
 const TUBE_SEGMENTS: usize = 48;
 
@@ -125,6 +136,13 @@ impl ReposeSettings {
         }
         if self.cells < 3 {
             return Err(("--cells", format!("must be at least 3 (a line needs three cells; got {})", self.cells)));
+        }
+        for (key, _) in &self.sets {
+            let own_key =
+                |own: &str| key.strip_prefix(own).is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']));
+            if let Some((own, flag)) = OWN_KEYS.iter().find(|(own, _)| own_key(own)) {
+                return Err(("--set", format!("`{key}` is the test's own ({own}): set it with {flag}, not --set")));
+            }
         }
         Ok(())
     }
@@ -892,5 +910,19 @@ mod tests {
         let mut s = ReposeSettings::for_radius(0.1);
         s.cells = 2;
         assert_eq!(s.check().unwrap_err().0, "--cells");
+        // Keys the test builds itself are refused; others pass (the scene checks their values).
+        for (key, refused) in [
+            ("sph.spacing", true),
+            ("materials[0].density", true),
+            ("bodies[1].position", true),
+            ("container.max", true),
+            ("sph.artificial_viscosity", false),
+            ("sph.spacing_extra", false),
+            ("simulation.precision", true),
+        ] {
+            let mut s = ReposeSettings::for_radius(0.1);
+            s.sets = vec![(key.into(), toml::Value::Float(0.0))];
+            assert_eq!(s.check().is_err(), refused, "{key}");
+        }
     }
 }

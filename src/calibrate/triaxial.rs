@@ -872,7 +872,7 @@ pub struct TriaxialReport {
     /// miss.
     pub bulk: super::Envelope,
     /// The envelope of the faces' normal force over area alone at failure (AGX's reading,
-    /// without the side plates' share of the axial load).
+    /// which also counts the load the plates' markers pass between soil layers).
     pub faces: super::Envelope,
     /// The particles' cohesionless envelope through the origin (degrees; for Cam Clay the
     /// critical-state angle to compare with asin(3M / (6 + M))).
@@ -953,6 +953,11 @@ pub struct TestTask {
     settings: TriaxialSettings,
 }
 
+/// What a test's record means, in its id: a record of an older meaning (the faces' stresses
+/// as the main reading, before session 17) gets another id, so `--resume` runs its test again
+/// instead of mixing readings in one envelope.
+const RECORD_FORMAT: &str = "triaxial record 2: soil's load, faces, bulk";
+
 impl TriaxialPlan {
     /// One test per confining stress of `s`, on `material`, in `dir`.
     pub fn new(material: &toml::Table, s: &TriaxialSettings, dir: &Path) -> Result<Self, CommandError> {
@@ -969,6 +974,7 @@ impl TriaxialPlan {
                     settings.as_bytes(),
                     &confining.to_bits().to_le_bytes(),
                     env!("CARGO_PKG_VERSION").as_bytes(),
+                    RECORD_FORMAT.as_bytes(),
                 ]),
                 confining,
                 material: material.clone(),
