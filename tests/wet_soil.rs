@@ -254,20 +254,13 @@ fn a_saturated_column_collapses_stable_and_finite_beside_the_dry_one() {
             summary.max_speed_run
         );
         // The soil at rest: read from the final particles (the water may still run on the floor).
-        let csv = std::fs::read_to_string(out.join("particles_final.csv")).expect("csv");
-        let header: Vec<&str> = csv.lines().next().expect("header").split(',').collect();
-        let col = |k: &str| header.iter().position(|h| *h == k).unwrap_or_else(|| panic!("no column {k}"));
-        let (vx, vz, z, mat) = (col("vx"), col("vz"), col("z"), col("material"));
         let (mut soil_speed, mut lowest) = (0.0_f64, f64::INFINITY);
-        for line in csv.lines().skip(1) {
-            let f: Vec<&str> = line.split(',').collect();
+        for p in final_particles(&out) {
             // Material 0 is the sand in both scenes.
-            if f[mat] != "0" {
-                continue;
+            if p.material == 0 {
+                soil_speed = soil_speed.max(p.speed);
+                lowest = lowest.min(p.z);
             }
-            let v: Vec<f64> = (vx..=vz).map(|k| f[k].parse().expect("velocity")).collect();
-            soil_speed = soil_speed.max(v.iter().map(|c| c * c).sum::<f64>().sqrt());
-            lowest = lowest.min(f[z].parse().expect("z"));
         }
         eprintln!("{name}: soil speed at the end {soil_speed:.4} m/s, lowest soil particle z = {lowest:.4} m");
         assert!(soil_speed < 0.1, "{name}: the soil still moves at {soil_speed:.3} m/s at 0.6 s");
@@ -276,6 +269,29 @@ fn a_saturated_column_collapses_stable_and_finite_beside_the_dry_one() {
     }
     eprintln!("runout (R∞ − R0)/R0 at d0 = 2 cm: dry {:.3}, saturated {:.3}", runouts[0], runouts[1]);
 }
+/// One row of a run's `particles_final.csv`: height, speed and material index.
+struct FinalParticle {
+    z: f64,
+    speed: f64,
+    material: usize,
+}
+
+/// The rows of `out/particles_final.csv`.
+fn final_particles(out: &std::path::Path) -> Vec<FinalParticle> {
+    let csv = std::fs::read_to_string(out.join("particles_final.csv")).expect("csv");
+    let header: Vec<&str> = csv.lines().next().expect("header").split(',').collect();
+    let col = |k: &str| header.iter().position(|h| *h == k).unwrap_or_else(|| panic!("no column {k}"));
+    let (vx, vz, z, mat) = (col("vx"), col("vz"), col("z"), col("material"));
+    csv.lines()
+        .skip(1)
+        .map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            let speed = (vx..=vz).map(|k| f[k].parse::<f64>().expect("velocity").powi(2)).sum::<f64>().sqrt();
+            FinalParticle { z: f[z].parse().expect("z"), speed, material: f[mat].parse().expect("material") }
+        })
+        .collect()
+}
+
 /// Terzaghi's average degree of consolidation for an initial excess pore pressure growing
 /// linearly with depth from zero at the drained top (a freshly deposited layer consolidating
 /// under its own buoyant weight, impermeable base): `U = 1 − Σ 4 (−1)^m / M³ exp(−M² T_v)`,
@@ -432,16 +448,9 @@ fn a_plate_on_a_freely_draining_saturated_clay_reads_eason_shield_like_the_dry_o
     );
     assert!(err.abs() <= 0.10, "{q:.0} Pa is {:+.1} % from 6.05 c = {reference} Pa (bound 10 %)", 100.0 * err);
     // Both phases under the plate moved: the water's and the soil's largest final speeds.
-    let csv = std::fs::read_to_string(out.join("particles_final.csv")).expect("csv");
-    let header: Vec<&str> = csv.lines().next().expect("header").split(',').collect();
-    let col = |k: &str| header.iter().position(|h| *h == k).unwrap_or_else(|| panic!("no column {k}"));
-    let (vx, vz, mat) = (col("vx"), col("vz"), col("material"));
     let mut fastest = [0.0_f64; 2];
-    for line in csv.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        let v: f64 = (vx..=vz).map(|k| f[k].parse::<f64>().expect("velocity").powi(2)).sum::<f64>().sqrt();
-        let m: usize = f[mat].parse().expect("material");
-        fastest[m] = fastest[m].max(v);
+    for p in final_particles(&out) {
+        fastest[p.material] = fastest[p.material].max(p.speed);
     }
     eprintln!("fastest at the end: clay {:.4} m/s, water {:.4} m/s", fastest[0], fastest[1]);
     assert!(fastest[0] > 1e-3 && fastest[1] > 1e-3, "both phases move under the plate: {fastest:?}");

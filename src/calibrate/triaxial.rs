@@ -94,6 +94,16 @@ pub enum EnvelopeSource {
     Plates,
 }
 
+impl EnvelopeSource {
+    /// What the envelope is read on, as printed and written in a calibrated material's header.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Particles => "the particles' own stresses",
+            Self::Plates => "the soil's load from the plates' forces",
+        }
+    }
+}
+
 /// Settings of the test (the command's flags).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TriaxialSettings {
@@ -1120,24 +1130,18 @@ pub fn calibrate_triaxial(inp: &TriaxialInputs) -> Result<TriaxialReport, Comman
         };
         let typed: Vec<String> = set.iter().map(|(key, v)| format!("{key} = {v:.4}")).collect();
         eprintln!(
-            "  {}: sample φ = {:.2}° ± {:.2}°, c = {:.1} ± {:.1} Pa (on the {})",
+            "  {}: sample φ = {:.2}° ± {:.2}°, c = {:.1} ± {:.1} Pa (on {})",
             typed.join(", "),
             measured.phi,
             measured.se_phi.unwrap_or(0.0),
             measured.c,
             measured.se_c.unwrap_or(0.0),
-            match inp.matching {
-                EnvelopeSource::Particles => "particles",
-                EnvelopeSource::Plates => "plates",
-            }
+            inp.matching.describe()
         );
         last = Some((m, tests, fit, dir));
         Ok(measured)
     };
-    let on = match inp.matching {
-        EnvelopeSource::Particles => "the particles' own stresses",
-        EnvelopeSource::Plates => "the soil's load from the plates' forces",
-    };
+    let on = inp.matching.describe();
     let why = |what: &str| {
         format!(
             "`regolith calibrate triaxial {what}`: set so that the SPH sample's\n# triaxial envelope on {on} meets the target (see triaxial.json)"
@@ -1323,20 +1327,17 @@ fn report(
     let (phi0, se_phi0) = mohr_coulomb_cohesionless(&s3, &s1).map_err(|e| {
         CommandError::Run(format!("the failure stresses σ3 = {s3:?} Pa, σ1 = {s1:?} Pa give no envelope: {e}"))
     })?;
-    let b3: Vec<f64> = tests.iter().map(|t| t.bulk.lateral).collect();
-    let b1: Vec<f64> = tests.iter().map(|t| t.bulk.vertical).collect();
-    let no_envelope = |e: super::fit::FitError| {
-        CommandError::Run(format!(
-            "the particles' failure stresses σ3 = {b3:?} Pa, σ1 = {b1:?} Pa give no envelope: {e}"
-        ))
+    let envelope_of = |what: &str, failure: &dyn Fn(&TriaxialTest) -> FailureStresses| {
+        let (s3, s1): (Vec<f64>, Vec<f64>) = tests.iter().map(|t| (failure(t).lateral, failure(t).vertical)).unzip();
+        let no_envelope = |e: super::fit::FitError| {
+            CommandError::Run(format!("{what} failure stresses σ3 = {s3:?} Pa, σ1 = {s1:?} Pa give no envelope: {e}"))
+        };
+        let through_origin = mohr_coulomb_cohesionless(&s3, &s1).map_err(no_envelope)?;
+        let (e, _) = super::Envelope::fit(&s3, &s1).map_err(no_envelope)?;
+        Ok::<_, CommandError>((e, through_origin))
     };
-    let (bulk_phi0, bulk_se_phi0) = mohr_coulomb_cohesionless(&b3, &b1).map_err(no_envelope)?;
-    let (bulk, _) = super::Envelope::fit(&b3, &b1).map_err(no_envelope)?;
-    let f3: Vec<f64> = tests.iter().map(|t| t.faces.lateral).collect();
-    let f1: Vec<f64> = tests.iter().map(|t| t.faces.vertical).collect();
-    let (faces, _) = super::Envelope::fit(&f3, &f1).map_err(|e| {
-        CommandError::Run(format!("the faces' failure stresses σ3 = {f3:?} Pa, σ1 = {f1:?} Pa give no envelope: {e}"))
-    })?;
+    let (bulk, (bulk_phi0, bulk_se_phi0)) = envelope_of("the particles'", &|t| t.bulk)?;
+    let (faces, _) = envelope_of("the faces'", &|t| t.faces)?;
     let de = s.strain_rate * SAMPLE_INTERVAL;
     let report = TriaxialReport {
         test: "triaxial_test",

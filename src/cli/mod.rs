@@ -450,8 +450,8 @@ pub struct TriaxialArgs {
     #[arg(long, value_name = "PA")]
     pub tolerance_c: Option<f64>,
     /// The envelope the loop matches to the targets: the particles' own stresses (the soil's
-    /// strength) or the plates' (AGX's reading, with its error) [default: particles; only
-    /// with --target-phi or --target-c].
+    /// strength) or the soil's load from the plates' forces (the report's main envelope)
+    /// [default: particles; only with --target-phi or --target-c].
     #[arg(long = "match", value_enum, value_name = "ENVELOPE")]
     pub matching: Option<MatchArg>,
     /// Output folder.
