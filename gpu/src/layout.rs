@@ -33,6 +33,17 @@ pub struct Params {
     pub cfl: f32,
     pub dt_max: f32,
     pub dt_fixed: f32,
+    /// Water (wet scenes; zero otherwise): rest density ρ_w, sound speed, viscosity, unit
+    /// weight at standard gravity, the lattice sum's inverse and itself, the full-support
+    /// fraction χ and the drag distribution (0 SVF, 1 per particle). See `cpu::WetSetup`.
+    pub w_rest: f32,
+    pub w_c: f32,
+    pub w_mu: f32,
+    pub w_gamma: f32,
+    pub inv_lsum: f32,
+    pub lsum: f32,
+    pub full_support: f32,
+    pub drag_particle: u32,
 }
 
 /// One soil particle.
@@ -112,6 +123,36 @@ pub struct Info {
     pub err_code: u32,
     pub vmax_end: u32,
     pub amax_end: u32,
+    /// Largest drag rate λ = Σ C V W / m of the first stage (1/s, wet scenes).
+    pub drag: u32,
+}
+
+/// What the phase coupling knows of a particle at a stage (see `Pore` in wet.wgsl; CPU twins
+/// `cpu::wet::Phase` and `cpu::wet::Pore`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Pore {
+    pub water: u32,
+    pub vg: f32,
+    pub inv_k: f32,
+    pub n: f32,
+    pub p: f32,
+    pub cw: f32,
+    pub inv_sum: f32,
+    pub sat: f32,
+    pub gv: [f32; 9],
+}
+
+/// A marker's share of the phase coupling (see `MarkerPore` in wet.wgsl; CPU twin
+/// `cpu::wet::MarkerPore`), and whether its owner is permeable.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MarkerPore {
+    pub vg: f32,
+    pub inv_k: f32,
+    pub p: f32,
+    pub vel: [f32; 3],
+    pub permeable: u32,
 }
 
 /// A material (see `Material` in materials.wgsl).
@@ -136,7 +177,10 @@ pub struct Material {
     pub clamp_lo: f32,
     pub clamp_hi: f32,
     pub pc_floor: f32,
-    pub pad: [f32; 2],
+    /// `1 / k` (s/m) of a soil water flows through; 0 otherwise.
+    pub inv_perm: f32,
+    /// Grain density ρ_g (kg/m³) of a soil water flows through; 0 otherwise.
+    pub grain_por: f32,
 }
 
 /// A body's state for marker placement and its marker range (see `Body` in bodies.wgsl).
@@ -160,13 +204,15 @@ mod tests {
 
     #[test]
     fn sizes_match_the_wgsl_structs() {
-        assert_eq!(size_of::<Params>(), 32 * 4);
+        assert_eq!(size_of::<Params>(), 40 * 4);
         assert_eq!(size_of::<Particle>(), 20 * 4);
         assert_eq!(size_of::<Packed>(), 16 * 4);
         assert_eq!(size_of::<Rate>(), 26 * 4);
         assert_eq!(size_of::<Marker>(), 10 * 4);
-        assert_eq!(size_of::<Info>(), 12 * 4);
+        assert_eq!(size_of::<Info>(), 13 * 4);
         assert_eq!(size_of::<Material>(), 20 * 4);
         assert_eq!(size_of::<Body>(), 24 * 4);
+        assert_eq!(size_of::<Pore>(), 17 * 4);
+        assert_eq!(size_of::<MarkerPore>(), 7 * 4);
     }
 }

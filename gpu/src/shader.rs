@@ -6,6 +6,8 @@ use std::fmt::Write as _;
 
 use crate::GpuError;
 use regolith_fsi::config::RAREFIED_DENSITY;
+use regolith_fsi::cpu::DELTA_SPH;
+use regolith_fsi::rheology::MIN_POROSITY;
 
 /// What the pipeline is specialised for: fixed for a solver's lifetime.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,6 +30,8 @@ pub struct Effects {
     pub dp: bool,
     /// Some material is Modified Cam Clay.
     pub mcc: bool,
+    /// The scene has water (the phase-coupling kernels are built).
+    pub wet: bool,
 }
 
 impl Effects {
@@ -43,6 +47,7 @@ impl Effects {
             (self.zero_surface, "zero-surface-stress"),
             (self.dp, "drucker-prager"),
             (self.mcc, "mcc"),
+            (self.wet, "water"),
         ] {
             if on {
                 v.push(name);
@@ -84,7 +89,10 @@ pub(crate) fn source(e: &Effects, v: &Variant, kernel: &str, with_rheology: bool
     let _ = writeln!(s, "const ADAPTIVE: bool = {};", b(e.adaptive));
     let _ = writeln!(s, "const HAS_MCC: bool = {};", b(e.mcc));
     let _ = writeln!(s, "const HAS_DP: bool = {};", b(e.dp));
+    let _ = writeln!(s, "const WET: bool = {};", b(e.wet));
     let _ = writeln!(s, "const RAREFIED_DENSITY: f32 = {:?};", RAREFIED_DENSITY as f32);
+    let _ = writeln!(s, "const MIN_POROSITY: f32 = {:?};", MIN_POROSITY as f32);
+    let _ = writeln!(s, "const DELTA_SPH: f32 = {:?};", DELTA_SPH as f32);
     let _ = writeln!(s, "const FS: bool = {};", b(v.fs));
     let _ = writeln!(s, "const STAGE: bool = {};", b(v.stage));
     let _ = writeln!(s, "const STRIDE: u32 = {}u;", v.stride.max(1));
@@ -106,6 +114,10 @@ pub(crate) fn source(e: &Effects, v: &Variant, kernel: &str, with_rheology: bool
         }
         if e.dp {
             s.push_str("    if (mat.model == MODEL_DP) { return dp_correct(mat, trial, d, err); }\n");
+        }
+        if e.wet {
+            // A liquid's stress is set from its equation of state each stage.
+            s.push_str("    if (mat.model == MODEL_WATER) { return trial; }\n");
         }
         s.push_str("    if (!sym_finite(trial)) { *err = ERR_ELASTIC_NONFINITE; }\n    return trial;\n}\n");
     }

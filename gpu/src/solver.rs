@@ -3,8 +3,10 @@
 use std::sync::mpsc;
 
 use bytemuck::Zeroable;
-use regolith_fsi::config::{DETACHED_THRESHOLD, FreeSurfaceStress, Integrator, KernelKind, SolverConfig, TimeStep};
-use regolith_fsi::cpu::GridSpec;
+use regolith_fsi::config::{
+    DETACHED_THRESHOLD, Drag, FreeSurfaceStress, Integrator, KernelKind, SolverConfig, TimeStep,
+};
+use regolith_fsi::cpu::{GridSpec, WetSetup, lattice_sums};
 use regolith_fsi::kernel::{CubicSpline, Kernel, WendlandC2};
 use regolith_fsi::math::{Sym3, Vec3};
 use regolith_fsi::rheology::{Material, PointState, Rheology, RheologyError};
@@ -13,9 +15,9 @@ use regolith_fsi::{BodyMarkers, BodyState, MarkerInit, ParticleInit, SolverError
 use crate::GpuError;
 use crate::kernels::{
     advance::Advance, bodies::Bodies, dispatch, extrapolate::Extrapolate, forces::Forces, pack::Pack, permute::Permute,
-    rates::Rates, scan::Scan, sort::Sort, step_info::StepInfo,
+    rates::Rates, scan::Scan, sort::Sort, step_info::StepInfo, wet::Wet,
 };
-use crate::layout::{self, Body, Info, Marker, Packed, Params, Particle, Rate};
+use crate::layout::{self, Body, Info, Marker, MarkerPore, Packed, Params, Particle, Pore, Rate};
 use crate::shader::{Effects, bind, groups};
 
 impl Effects {
@@ -31,6 +33,7 @@ impl Effects {
             adaptive: matches!(cfg.time_step, TimeStep::Adaptive { .. }),
             dp: materials.iter().any(|m| matches!(m.rheology, Rheology::DruckerPrager(_))),
             mcc: materials.iter().any(|m| matches!(m.rheology, Rheology::Mcc(_))),
+            wet: materials.iter().any(Material::is_water),
         }
     }
 }
@@ -102,6 +105,25 @@ struct Groups {
     bodies: wgpu::BindGroup,
 }
 
+/// The phase coupling of a wet scene: its kernels, buffers and bind groups.
+struct WetParts {
+    k: Wet,
+    /// Per owner (0 = walls, k + 1 = body k): 1 where water passes through its markers.
+    owner_perm: wgpu::Buffer,
+    n_owners: usize,
+    phases: wgpu::BindGroup,
+    marker_solids: wgpu::BindGroup,
+    porosity: wgpu::BindGroup,
+    soil_pressures: wgpu::BindGroup,
+    extrapolate: [wgpu::BindGroup; 2],
+    rates: [wgpu::BindGroup; 2],
+    marker_forces: wgpu::BindGroup,
+    init_water: wgpu::BindGroup,
+    water_stress: wgpu::BindGroup,
+    /// The water's partial densities and masses were set from the porosity (first step).
+    ready: bool,
+}
+
 /// Host copy of the particles, refreshed by `sync`.
 #[derive(Default)]
 struct Mirror {
@@ -152,6 +174,8 @@ pub struct GpuSph {
     m_pos: Vec<Vec3<f32>>,
     m_force: Vec<Vec3<f32>>,
     mirror: Mirror,
+    /// Wet scenes only.
+    wet: Option<WetParts>,
 }
 
 const USAGE: wgpu::BufferUsages =
@@ -191,8 +215,11 @@ fn gpu_material(m: &Material<f32>) -> layout::Material {
             }
             g.pc_floor = mcc.safeguards.pc_floor;
         }
-        // Refused in `GpuSph::new`.
-        Rheology::Water(_) => g.model = u32::MAX,
+        Rheology::Water(_) => g.model = 3,
+    }
+    if m.permeability > 0.0 {
+        g.inv_perm = 1.0 / m.permeability;
+        g.grain_por = m.grain_density;
     }
     g
 }
@@ -229,11 +256,7 @@ impl GpuSph {
         if materials.is_empty() {
             return Err(GpuError::Setup("no materials".into()));
         }
-        if materials.iter().any(Material::is_water) {
-            return Err(GpuError::Setup(
-                "water (a wet scene) runs on the CPU backend only for now: set [simulation] backend = \"cpu\"".into(),
-            ));
-        }
+        let wet = WetSetup::<f32>::of(&materials, lattice_sums(&cfg), cfg.drag).map_err(GpuError::Setup)?;
         if let Some(p) = particles.iter().find(|p| p.material as usize >= materials.len()) {
             return Err(GpuError::Setup(format!("particle material index {} out of range", p.material)));
         }
@@ -271,6 +294,14 @@ impl GpuSph {
                 needed: need_groups,
                 allowed: max_groups,
                 limit: "max_compute_workgroups_per_dimension",
+            });
+        }
+        if wet.is_some() && limits.max_storage_buffers_per_shader_stage < crate::kernels::wet::MOST_STORAGE_BUFFERS {
+            return Err(GpuError::Limit {
+                what: "the wet rates kernel".into(),
+                needed: u64::from(crate::kernels::wet::MOST_STORAGE_BUFFERS),
+                allowed: u64::from(limits.max_storage_buffers_per_shader_stage),
+                limit: "max_storage_buffers_per_shader_stage",
             });
         }
         if n_cells as u64 + 2 > u64::from(u32::MAX) {
@@ -315,6 +346,14 @@ impl GpuSph {
             cfl,
             dt_max,
             dt_fixed,
+            w_rest: wet.map_or(0.0, |w| w.rest),
+            w_c: wet.map_or(0.0, |w| w.water.sound_speed),
+            w_mu: wet.map_or(0.0, |w| w.water.viscosity),
+            w_gamma: wet.map_or(0.0, |w| w.gamma),
+            inv_lsum: wet.map_or(0.0, |w| w.inv_lattice_sum),
+            lsum: wet.map_or(0.0, |w| w.lattice_sum),
+            full_support: wet.map_or(0.0, |w| w.full_support),
+            drag_particle: u32::from(wet.is_some_and(|w| w.drag == Drag::Particle)),
         };
         let effects = Effects::resolve(&cfg, &materials);
 
@@ -351,6 +390,9 @@ impl GpuSph {
             variants.push(format!("advance[stage,{rheo}]"));
         }
         variants.push(format!("advance[{rheo}]"));
+        if effects.wet {
+            variants.extend(Wet::names().iter().map(|s| s.to_string()));
+        }
 
         let init_parts: Vec<Particle> = particles
             .iter()
@@ -581,6 +623,64 @@ impl GpuSph {
                 ],
             ),
         };
+        let wet = match wet {
+            None => None,
+            Some(_) => {
+                let kw = Wet::new(device, &effects)?;
+                let n_owners = n_bodies + 1;
+                // The bind groups keep these alive: per particle (sorted order) its phase,
+                // porosity, pore pressure and velocity gradient; per sorted marker its solid
+                // share, pore pressure, drag velocity and permeability, and the water's record
+                // (the soil's is `Buffers::m_packed`).
+                let pore = mk("pore", sz(n, size_of::<Pore>()), USAGE);
+                let m_pore = mk("markers.pore", sz(nm, size_of::<MarkerPore>()), USAGE);
+                let m_packed_w = mk("markers.packed.water", sz(nm, size_of::<Packed>()), USAGE);
+                let owner_perm = mk("owners.permeable", sz(n_owners, 4), USAGE);
+                queue.write_buffer(&owner_perm, 0, bytemuck::cast_slice(&vec![0u32; n_owners]));
+                let group = |label: &str, e: &crate::kernels::wet::Entry, used: &[u32], from: usize| {
+                    let buf = |binding: u32| -> &wgpu::Buffer {
+                        match binding {
+                            0 => &b.params,
+                            1 => &b.packed,
+                            2 => &b.start,
+                            3 => &b.m_packed,
+                            4 => &m_packed_w,
+                            5 => &b.m_start,
+                            6 => &b.moduli,
+                            7 if from == 0 => &b.parts,
+                            7 => &b.stage,
+                            8 => &b.rates,
+                            9 => &b.info,
+                            10 => &b.materials,
+                            11 => &pore,
+                            12 => &m_pore,
+                            13 => &b.m_sorted,
+                            14 => &owner_perm,
+                            15 => &b.m_order,
+                            _ => &b.m_force,
+                        }
+                    };
+                    let entries: Vec<(u32, &wgpu::Buffer)> = used.iter().map(|&u| (u, buf(u))).collect();
+                    bind(device, label, &e.layout, &entries)
+                };
+                use crate::kernels::wet::bindings as wb;
+                Some(WetParts {
+                    phases: group("phases", &kw.phases, wb::PHASES, 0),
+                    marker_solids: group("marker_solids", &kw.marker_solids, wb::MARKER_SOLIDS, 0),
+                    porosity: group("porosity", &kw.porosity, wb::POROSITY, 0),
+                    soil_pressures: group("soil_pressures", &kw.soil_pressures, wb::SOIL_PRESSURES, 0),
+                    extrapolate: [0, 1].map(|f| group("wet_extrapolate", &kw.extrapolate, wb::EXTRAPOLATE, f)),
+                    rates: [0, 1].map(|f| group("wet_rates", &kw.rates[f], wb::RATES, f)),
+                    marker_forces: group("wet_marker_forces", &kw.marker_forces, wb::MARKER_FORCES, 0),
+                    init_water: group("init_water", &kw.init_water, wb::PARTICLE_STATE, 0),
+                    water_stress: group("water_stress", &kw.water_stress, wb::PARTICLE_STATE, 0),
+                    k: kw,
+                    owner_perm,
+                    n_owners,
+                    ready: false,
+                })
+            }
+        };
         let mut s = Self {
             device: device.clone(),
             queue: queue.clone(),
@@ -609,6 +709,7 @@ impl GpuSph {
             m_host,
             m_force: vec![Vec3::zero(); nm],
             mirror: Mirror::default(),
+            wet,
         };
         s.sync().map_err(|e| GpuError::Device(e.to_string()))?;
         s.sync_diagnostics()?;
@@ -672,6 +773,17 @@ impl GpuSph {
     /// Pack, extrapolate and rates from the current (`0`) or midpoint (`1`) state.
     fn record_evaluate(&self, enc: &mut wgpu::CommandEncoder, from: usize, forces: bool) {
         let (k, g) = (&self.k, &self.g);
+        if let Some(w) = &self.wet {
+            self.record_pores(enc, w, from);
+            let (kw, n, nm) = (&w.k, groups(self.n), groups(self.nm));
+            dispatch(enc, &kw.extrapolate.pipeline, &w.extrapolate[from], nm);
+            dispatch(enc, &kw.rates[from].pipeline, &w.rates[from], n);
+            if forces {
+                enc.clear_buffer(&self.b.m_force, 0, None);
+                dispatch(enc, &kw.marker_forces.pipeline, &w.marker_forces, nm);
+            }
+            return;
+        }
         dispatch(enc, &k.pack.pack, &g.pack[from], groups(self.n));
         dispatch(enc, &k.extrapolate.extrapolate, &g.extrapolate[from], groups(self.nm));
         let rates = if from == 0 { &k.rates.first } else { &k.rates.second };
@@ -680,6 +792,18 @@ impl GpuSph {
             enc.clear_buffer(&self.b.m_force, 0, None);
             dispatch(enc, &k.forces.marker_forces, &g.forces, groups(self.nm));
         }
+    }
+
+    /// The passes of a wet evaluation up to the porosity (CPU twin: `CpuSph::wet_pores`):
+    /// records packed, phases, the markers' solid shares, the water's porosity and pressure,
+    /// the soil's saturation and interpolated pore pressure.
+    fn record_pores(&self, enc: &mut wgpu::CommandEncoder, w: &WetParts, from: usize) {
+        let (kw, n, nm) = (&w.k, groups(self.n), groups(self.nm));
+        dispatch(enc, &self.k.pack.pack, &self.g.pack[from], n);
+        dispatch(enc, &kw.phases.pipeline, &w.phases, n);
+        dispatch(enc, &kw.marker_solids.pipeline, &w.marker_solids, nm);
+        dispatch(enc, &kw.porosity.pipeline, &w.porosity, n);
+        dispatch(enc, &kw.soil_pressures.pipeline, &w.soil_pressures, n);
     }
 
     /// Copies `src` into a mappable buffer, waits, and hands the bytes to `f`.
@@ -726,6 +850,15 @@ impl GpuSph {
         }
         self.record_sort(&mut enc);
         self.markers_dirty = false;
+        if let Some(w) = self.wet.as_ref().filter(|w| !w.ready) {
+            // The water's partial density and mass from the porosity it starts in
+            // (CPU twin: `CpuSph::init_water`).
+            self.record_pores(&mut enc, w, 0);
+            dispatch(&mut enc, &w.k.init_water.pipeline, &w.init_water, groups(self.n));
+        }
+        if let Some(w) = self.wet.as_mut() {
+            w.ready = true;
+        }
         self.record_evaluate(&mut enc, 0, !rk2);
         dispatch(&mut enc, &self.k.info.maxima, &self.g.info, groups(self.n));
         dispatch(&mut enc, &self.k.info.choose_dt, &self.g.info, 1);
@@ -734,6 +867,10 @@ impl GpuSph {
             self.record_evaluate(&mut enc, 1, true);
         }
         dispatch(&mut enc, &self.k.advance.finish, &self.g.advance, groups(self.n));
+        if let Some(w) = &self.wet {
+            // A water particle's stress is its pore pressure (from the last evaluation).
+            dispatch(&mut enc, &w.k.water_stress.pipeline, &w.water_stress, groups(self.n));
+        }
         enc.copy_buffer_to_buffer(&self.b.info, 0, &self.b.info_read, 0, Some(size_of::<Info>() as u64));
         let nb = self.n_bodies;
         if nb > 0 {
@@ -969,6 +1106,17 @@ impl SphSolver<f32> for GpuSph {
     }
     fn variants(&self) -> Vec<String> {
         self.variants.clone()
+    }
+    fn set_permeable(&mut self, permeable: &[bool]) -> Result<(), SolverError> {
+        let Some(w) = &self.wet else {
+            if permeable.iter().any(|p| *p) {
+                return Err(SolverError::Setup("permeable markers need water in the scene".into()));
+            }
+            return Ok(());
+        };
+        let flags: Vec<u32> = (0..w.n_owners).map(|o| u32::from(permeable.get(o).copied().unwrap_or(false))).collect();
+        self.queue.write_buffer(&w.owner_perm, 0, bytemuck::cast_slice(&flags));
+        Ok(())
     }
     fn as_cpu(&self) -> Option<&regolith_fsi::cpu::CpuSph<f32>> {
         None

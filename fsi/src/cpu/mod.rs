@@ -23,6 +23,7 @@ mod wet;
 
 pub use grid::GridSpec;
 pub use memory::MemoryUse;
+pub use wet::{DELTA_SPH, WetSetup};
 
 use rayon::prelude::*;
 
@@ -179,7 +180,7 @@ pub struct CpuSph<T: Real> {
     /// Steps made again from fresh lists because the midpoint stage left the skin.
     stage_retries: u64,
     // Wet scenes (see `wet`); empty for dry ones.
-    wet: Option<wet::WetSetup<T>>,
+    wet: Option<WetSetup<T>>,
     /// The water's densities were set from the porosity the soil gives them at the start.
     water_ready: bool,
     phase: Vec<wet::Phase<T>>,
@@ -250,7 +251,7 @@ impl<T: Real> CpuSph<T> {
             )));
         }
         let h = cfg.h();
-        let wet = wet::WetSetup::of(&materials, lattice_sums(&cfg), cfg.drag).map_err(SolverError::Setup)?;
+        let wet = WetSetup::of(&materials, lattice_sums(&cfg), cfg.drag).map_err(SolverError::Setup)?;
         let grid = GridSpec::covering(domain.0, domain.1, h);
         let n = particles.len();
         let n_wet = if wet.is_some() { n } else { 0 };
@@ -1103,7 +1104,7 @@ impl<T: Real> CpuSph<T> {
     /// The packing and marker passes of a wet evaluation, up to the porosity: records packed,
     /// phases known, the markers' solid shares, the water's porosity, pressure and partial
     /// stress, the soil's saturation.
-    fn wet_pores<K: Kernel<T>>(&mut self, setup: &wet::WetSetup<T>, from_stage: bool) {
+    fn wet_pores<K: Kernel<T>>(&mut self, setup: &WetSetup<T>, from_stage: bool) {
         let m = self.near;
         let c = self.consts;
         self.pack(from_stage);
@@ -1142,7 +1143,7 @@ impl<T: Real> CpuSph<T> {
     }
 
     /// A rate evaluation of a wet scene (see [`wet`]); the dry one is [`Self::evaluate_k`].
-    fn evaluate_wet<K: Kernel<T>>(&mut self, setup: wet::WetSetup<T>, from_stage: bool, with_forces: bool) {
+    fn evaluate_wet<K: Kernel<T>>(&mut self, setup: WetSetup<T>, from_stage: bool, with_forces: bool) {
         self.wet_pores::<K>(&setup, from_stage);
         let (n, m) = (self.awake, self.near);
         let sigma = if from_stage { &self.s_sigma[..m] } else { &self.sigma[..m] };
@@ -1525,7 +1526,7 @@ fn relaid<V: Copy>(v: &[V], (kept, escaped): (&[usize], &[usize]), fresh: impl I
 /// lattice) seen from a lattice site, for the configured kernel and h; and the least fraction
 /// of it seen from any point of a cell (searched on a grid of eighths of d0 over the eighth
 /// of the cell that symmetry leaves).
-fn lattice_sums(cfg: &SolverConfig) -> (f64, f64) {
+pub fn lattice_sums(cfg: &SolverConfig) -> (f64, f64) {
     let (h, d0) = (cfg.h(), cfg.spacing);
     let reach = (2.0 * h / d0).ceil() as i64 + 1;
     let w = |r: f64| match cfg.kernel {

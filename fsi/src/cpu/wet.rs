@@ -58,9 +58,9 @@ use crate::rheology::{MIN_POROSITY, Material, Moduli, Rheology, STANDARD_GRAVITY
 use super::neighbors::NeighborList;
 use super::rates::{Packed, PairConsts, PairSums, Rate};
 
-/// The water of a wet scene (one water material).
+/// The water of a wet scene (one water material): what every backend's coupling passes need.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct WetSetup<T> {
+pub struct WetSetup<T> {
     /// The liquid.
     pub water: Water<T>,
     /// Rest density ρ_w (kg/m³).
@@ -550,7 +550,7 @@ pub(crate) fn wet_rates<T: Real, K: Kernel<T>, const VISC: bool, const XSPH: boo
 
 /// The δ-SPH coefficient δ of the water's density diffusion (Molteni & Colagrossi 2009; 0.1 is
 /// the usual value).
-pub(crate) const DELTA_SPH: f64 = 0.1;
+pub const DELTA_SPH: f64 = 0.1;
 
 /// The water's density diffusion between `a` and `b` (before the factor `δ h c n_a`): the
 /// Laplacian `2 Σ V_b (ψ_b − ψ_a − ψ^H_ab) (r·∇W) / (r² + η²)` of the intrinsic density ψ,

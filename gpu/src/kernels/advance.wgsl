@@ -4,7 +4,8 @@
 // shifting (off at the free surface, capped at 0.2 d0) and the checks that stop a run: a
 // failed return mapping, or a non-finite position, velocity or density. Detached particles,
 // and surface ones in the `Zero` mode, carry no stress. The density is held at
-// RAREFIED_DENSITY x rho0 when continuity would take it lower (counted in `info.rarefied`).
+// RAREFIED_DENSITY x rho0 when continuity would take it lower (counted in `info.rarefied`;
+// water, whose density is partial, at RAREFIED_DENSITY x MIN_POROSITY x rho0).
 // CPU twin: `CpuSph::advance`, `cpu::correct` and `cpu::at_least`.
 
 @group(0) @binding(0) var<uniform> prm: Params;
@@ -51,6 +52,12 @@ fn at_least(x: f32, floor: f32) -> f32 {
     return select(x, floor, x < floor);
 }
 
+// The density below which a particle of `mat` is held (CPU twin: `cpu::density_floor`).
+fn density_floor(mat: Material) -> f32 {
+    if (WET && mat.model == MODEL_WATER) { return mat.density * RAREFIED_DENSITY * MIN_POROSITY; }
+    return mat.density * RAREFIED_DENSITY;
+}
+
 fn fail(id: u32, code: u32) {
     atomicMin(&info.err_id, id);
     atomicMax(&info.err_code, code);
@@ -78,7 +85,7 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>) {
         var q = p;
         q.px = sp.x; q.py = sp.y; q.pz = sp.z;
         q.vx = sv.x; q.vy = sv.y; q.vz = sv.z;
-        q.rho = at_least(p.rho + r.drho * h, mat.density * RAREFIED_DENSITY);
+        q.rho = at_least(p.rho + r.drho * h, density_floor(mat));
         q.sxx = c.s.xx; q.syy = c.s.yy; q.szz = c.s.zz; q.sxy = c.s.xy; q.sxz = c.s.xz; q.syz = c.s.yz;
         q.pc = c.pc;
         q.sv = c.sv;
@@ -98,7 +105,7 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>) {
         dx += d;
     }
     let np = pos + dx;
-    let floor = mat.density * RAREFIED_DENSITY;
+    let floor = density_floor(mat);
     let rho = at_least(p.rho + r.drho * h, floor);
     if (rho <= floor) { atomicAdd(&info.rarefied, 1u); }
     let c = correct(mat, load_sigma(p), p.pc, p.sv, r, h, stress_free, &err);

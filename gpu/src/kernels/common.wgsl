@@ -11,6 +11,8 @@ struct Params {
     g_x: f32, g_y: f32, g_z: f32, ref_cs: f32,
     xsph_eps: f32, shift: f32, max_shift: f32, fs_threshold: f32,
     detach_threshold: f32, cfl: f32, dt_max: f32, dt_fixed: f32,
+    w_rest: f32, w_c: f32, w_mu: f32, w_gamma: f32,
+    inv_lsum: f32, lsum: f32, full_support: f32, drag_particle: u32,
 }
 
 struct Particle {
@@ -50,6 +52,7 @@ struct Info {
     n_active: u32, dt: f32, max_dt: f32, rarefied: atomic<u32>,
     cmax: atomic<u32>, vmax: atomic<u32>, amax: atomic<u32>, pairs: atomic<u32>,
     err_id: atomic<u32>, err_code: atomic<u32>, vmax_end: atomic<u32>, amax_end: atomic<u32>,
+    drag: atomic<u32>,
 }
 
 // Flag bits of `Particle.flags`.
@@ -195,3 +198,60 @@ fn pair_term(pa: Packed, pb: Packed, r: vec3<f32>, r2: f32, gw: vec3<f32>, vab: 
 
 // max over non-negative floats with a u32 atomic: their bit patterns order like the values.
 fn max_bits(x: f32) -> u32 { return bitcast<u32>(max(x, 0.0)); }
+
+// Jaumann rate 2G D' + K tr(D) I + (Omega sigma - sigma Omega), spin as (W_xy, W_xz, W_yz).
+fn jaumann(s: Sym, d: Sym, w: vec3<f32>, m: vec2<f32>) -> Sym {
+    let dev = sym_dev(d);
+    let el = sym_add(sym_scale(dev, 2.0 * m.y), sym_iso(m.x * sym_trace(d)));
+    let a = w.x;
+    let b = w.y;
+    let c = w.z;
+    let mxx = a * s.xy + b * s.xz;
+    let mxy = a * s.yy + b * s.yz;
+    let mxz = a * s.yz + b * s.zz;
+    let myx = -a * s.xx + c * s.xz;
+    let myy = -a * s.xy + c * s.yz;
+    let myz = -a * s.xz + c * s.zz;
+    let mzx = -b * s.xx - c * s.xy;
+    let mzy = -b * s.xy - c * s.yy;
+    let mzz = -b * s.xz - c * s.yz;
+    return sym_add(el, Sym(2.0 * mxx, 2.0 * myy, 2.0 * mzz, mxy + myx, mxz + mzx, myz + mzy));
+}
+
+struct Acc {
+    drho: f32,
+    acc: vec3<f32>,
+    l0: vec3<f32>, l1: vec3<f32>, l2: vec3<f32>,
+    fs: Sym,
+    xs: vec3<f32>,
+    gc: vec3<f32>,
+}
+
+// The pair sums of a soil particle's rates with neighbour pb (is_soil: a particle, not a
+// marker). CPU twin: `PairSums::add`.
+fn visit(s: ptr<function, Acc>, pa: Packed, pb: Packed, is_soil: bool) {
+    let r = packed_x(pa) - packed_x(pb);
+    let r2 = dot(r, r);
+    if (r2 >= prm.support2) { return; }
+    let rr = sqrt(r2);
+    let f = kernel_grad_factor(rr, prm.inv_h, prm.alpha);
+    let gw = r * f;
+    let vab = packed_v(pa) - packed_v(pb);
+    (*s).drho += pb.vol * dot(vab, gw);
+    (*s).acc += pair_term(pa, pb, r, r2, gw, vab) * pb.mass;
+    let mv = vab * (-pb.vol);
+    (*s).l0 += mv.x * gw;
+    (*s).l1 += mv.y * gw;
+    (*s).l2 += mv.z * gw;
+    if (FS) {
+        let k = -pb.vol * f;
+        (*s).fs = sym_add((*s).fs, Sym(k * r.x * r.x, k * r.y * r.y, k * r.z * r.z, k * r.x * r.y, k * r.x * r.z, k * r.y * r.z));
+    }
+    if (XSPH && is_soil) {
+        let w = kernel_w(rr, prm.inv_h, prm.alpha);
+        (*s).xs -= vab * (2.0 * pb.mass / (pa.rho + pb.rho) * w);
+    }
+    if (PPST) {
+        (*s).gc += gw * pb.vol;
+    }
+}

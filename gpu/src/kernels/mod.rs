@@ -12,6 +12,7 @@ pub(crate) mod rates;
 pub(crate) mod scan;
 pub(crate) mod sort;
 pub(crate) mod step_info;
+pub(crate) mod wet;
 
 /// Records one dispatch in its own compute pass (passes order the storage writes).
 pub(crate) fn dispatch(

@@ -15,61 +15,6 @@
 @group(0) @binding(7) var<storage, read_write> rates: array<Rate>;
 @group(0) @binding(8) var<storage, read_write> info: Info;
 
-// Jaumann rate 2G D' + K tr(D) I + (Omega sigma - sigma Omega), spin as (W_xy, W_xz, W_yz).
-fn jaumann(s: Sym, d: Sym, w: vec3<f32>, m: vec2<f32>) -> Sym {
-    let dev = sym_dev(d);
-    let el = sym_add(sym_scale(dev, 2.0 * m.y), sym_iso(m.x * sym_trace(d)));
-    let a = w.x;
-    let b = w.y;
-    let c = w.z;
-    let mxx = a * s.xy + b * s.xz;
-    let mxy = a * s.yy + b * s.yz;
-    let mxz = a * s.yz + b * s.zz;
-    let myx = -a * s.xx + c * s.xz;
-    let myy = -a * s.xy + c * s.yz;
-    let myz = -a * s.xz + c * s.zz;
-    let mzx = -b * s.xx - c * s.xy;
-    let mzy = -b * s.xy - c * s.yy;
-    let mzz = -b * s.xz - c * s.yz;
-    return sym_add(el, Sym(2.0 * mxx, 2.0 * myy, 2.0 * mzz, mxy + myx, mxz + mzx, myz + mzy));
-}
-
-struct Acc {
-    drho: f32,
-    acc: vec3<f32>,
-    l0: vec3<f32>, l1: vec3<f32>, l2: vec3<f32>,
-    fs: Sym,
-    xs: vec3<f32>,
-    gc: vec3<f32>,
-}
-
-fn visit(s: ptr<function, Acc>, pa: Packed, pb: Packed, is_soil: bool) {
-    let r = packed_x(pa) - packed_x(pb);
-    let r2 = dot(r, r);
-    if (r2 >= prm.support2) { return; }
-    let rr = sqrt(r2);
-    let f = kernel_grad_factor(rr, prm.inv_h, prm.alpha);
-    let gw = r * f;
-    let vab = packed_v(pa) - packed_v(pb);
-    (*s).drho += pb.vol * dot(vab, gw);
-    (*s).acc += pair_term(pa, pb, r, r2, gw, vab) * pb.mass;
-    let mv = vab * (-pb.vol);
-    (*s).l0 += mv.x * gw;
-    (*s).l1 += mv.y * gw;
-    (*s).l2 += mv.z * gw;
-    if (FS) {
-        let k = -pb.vol * f;
-        (*s).fs = sym_add((*s).fs, Sym(k * r.x * r.x, k * r.y * r.y, k * r.z * r.z, k * r.x * r.y, k * r.x * r.z, k * r.y * r.z));
-    }
-    if (XSPH && is_soil) {
-        let w = kernel_w(rr, prm.inv_h, prm.alpha);
-        (*s).xs -= vab * (2.0 * pb.mass / (pa.rho + pb.rho) * w);
-    }
-    if (PPST) {
-        (*s).gc += gw * pb.vol;
-    }
-}
-
 @compute @workgroup_size(64)
 fn soil_rates(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;

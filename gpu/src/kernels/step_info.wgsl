@@ -1,7 +1,8 @@
 // Step bookkeeping: `reset` clears the step's maxima and error slot, `maxima` takes the
 // largest speed and acceleration after the first stage, `choose_dt` sets the step
 // dt = C min(h / (c_max + |v|max), sqrt(h / |a|max)) (or the fixed step), at most the largest
-// step allowed and the host's limit. CPU twin: `CpuSph::choose_dt`.
+// step allowed and the host's limit; in a wet scene also at most 1 / lambda, the largest drag
+// rate of the first stage. CPU twin: `CpuSph::choose_dt`.
 
 @group(0) @binding(0) var<uniform> prm: Params;
 @group(0) @binding(1) var<storage, read> parts: array<Particle>;
@@ -19,6 +20,7 @@ fn reset() {
     atomicStore(&info.vmax_end, 0u);
     atomicStore(&info.amax_end, 0u);
     atomicStore(&info.rarefied, 0u);
+    atomicStore(&info.drag, 0u);
 }
 
 @compute @workgroup_size(64)
@@ -40,6 +42,9 @@ fn choose_dt() {
         let amax = bitcast<f32>(atomicLoad(&info.amax));
         dt = prm.cfl * prm.h / (cmax + vmax);
         if (amax > 0.0) { dt = min(dt, prm.cfl * sqrt(prm.h / amax)); }
+        // Explicit drag (wet scenes): stable below 2 / lambda.
+        let lambda = bitcast<f32>(atomicLoad(&info.drag));
+        if (lambda > 0.0) { dt = min(dt, 1.0 / lambda); }
         dt = min(dt, prm.dt_max);
     }
     info.dt = min(dt, info.max_dt);
