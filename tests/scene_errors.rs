@@ -608,12 +608,6 @@ fn wet_scene_mistakes_are_one_line_errors() {
             ":36: key `water_blocks[0].initial_pressure`: applies to soil blocks; water starts hydrostatic from the water above it",
         ),
         (
-            "wet_wgpu",
-            "dt = \"auto\"",
-            "dt = \"auto\"\nbackend = \"wgpu\"",
-            ":4: key `simulation.backend`: \"wgpu\" has no water phase yet: a scene with [[water_blocks]] runs on \"cpu\"",
-        ),
-        (
             "wet_active",
             "spacing = 0.02",
             "spacing = 0.02\n\n[sph.active]\nenabled = true",

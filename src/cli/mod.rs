@@ -167,10 +167,22 @@ pub enum StudyCommand {
         /// Drag distributions, comma-separated.
         #[arg(long, value_enum, value_name = "DRAG,...", value_delimiter = ',', default_value = "svf,particle")]
         drag: Vec<DragArg>,
+        /// Backend: cpu (f64, the reference) or wgpu (f32).
+        #[arg(long, value_enum, default_value = "cpu")]
+        backend: StudyBackendArg,
         /// Output folder.
         #[arg(long, value_name = "DIR", default_value = "out/darcy")]
         out: PathBuf,
     },
+}
+
+/// The backend a study's runs take.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum StudyBackendArg {
+    /// Rayon on the CPU, f64.
+    Cpu,
+    /// WGSL compute through wgpu, f32.
+    Wgpu,
 }
 
 /// Soil–water drag distribution (`[sph] drag`).
@@ -959,7 +971,21 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             batch::threads_only(&a.runner)?;
             calibrate::triaxial(a.inputs()?)
         }
-        Command::Study { study: StudyCommand::Darcy { spacings, drag, out } } => {
+        Command::Study { study: StudyCommand::Darcy { spacings, drag, backend, out } } => {
+            let backend = match backend {
+                StudyBackendArg::Cpu => crate::scene::Backend::Cpu,
+                StudyBackendArg::Wgpu => {
+                    // An adapter must exist (lavapipe counts): said before any run, as one line.
+                    let mut probe = crate::study::darcy::filter_column(0.02, regolith_fsi::config::Drag::Svf, 0.1)
+                        .map_err(Failure::Input)?;
+                    probe.backend = crate::scene::Backend::Wgpu;
+                    probe.precision = crate::scene::Precision::F32;
+                    probe.precision_set = false;
+                    crate::build::backend::resolve_backend(&mut probe)
+                        .map_err(|e| Failure::Input(InputError::flag("--backend", e)))?;
+                    crate::scene::Backend::Wgpu
+                }
+            };
             let drags = drag
                 .into_iter()
                 .map(|d| match d {
@@ -970,6 +996,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             let points = crate::study::darcy::darcy_study(&crate::study::darcy::DarcyOptions {
                 spacings,
                 drags,
+                backend,
                 out: out.clone(),
             })
             .map_err(study::study_failure)?;

@@ -164,12 +164,6 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     {
         return Err(e(&format!("bodies[{i}].permeable"), "needs water in the scene ([[water_blocks]])".into()));
     }
-    if wet && backend == Backend::Wgpu {
-        return Err(e(
-            "simulation.backend",
-            "\"wgpu\" has no water phase yet: a scene with [[water_blocks]] runs on \"cpu\"".into(),
-        ));
-    }
     if !wet && file.sph.as_ref().is_some_and(|s| s.drag.is_some()) {
         return Err(e(
             "sph.drag",

@@ -18,17 +18,20 @@
 //! with, and where the drag's treatment of the layer's faces shows (a face error of order h / L
 //! falls linearly with d0); and `−k (dp/dz / γ_w + 1)` from the measured gradient inside the
 //! layer — Darcy's law locally, free of the faces.
+//!
+//! The column runs on the CPU backend in f64 (the reference), or with `--backend wgpu` on the
+//! device in f32: the same study of the wgpu twin of the wet loop.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use regolith_fsi::Real;
 use regolith_fsi::config::Drag;
+use regolith_fsi::{Real, SphSolver};
 use serde::Serialize;
 
 use super::StudyError;
 use crate::input::InputError;
-use crate::scene::{Scene, load_scene_source};
+use crate::scene::{Backend, Precision, Scene, load_scene_source};
 
 /// Layer thickness (m).
 const LAYER: f64 = 0.1;
@@ -75,7 +78,7 @@ pub fn filter_column(d0: f64, drag: Drag, end: f64) -> Result<Scene, InputError>
 
 /// The Darcy flux through the soil between `z0` and `z1` and the slope dp/dz of the pore
 /// pressure there (see the module docs).
-pub fn flux_and_gradient(s: &regolith_fsi::cpu::CpuSph<f64>, z0: f64, z1: f64) -> (f64, f64) {
+pub fn flux_and_gradient<T: Real>(s: &dyn SphSolver<T>, z0: f64, z1: f64) -> (f64, f64) {
     let mats = s.materials();
     let (mut flux, mut volume) = (0.0, 0.0);
     let (mut n, mut sz, mut sp, mut szz, mut szp) = (0.0, 0.0, 0.0, 0.0, 0.0);
@@ -108,6 +111,8 @@ pub struct DarcyPoint {
     pub d0: f64,
     /// Drag distribution.
     pub drag: &'static str,
+    /// Backend (`cpu` in f64, `wgpu` in f32).
+    pub backend: &'static str,
     /// Soil and water particles.
     pub particles: usize,
     /// Exchanges run.
@@ -129,33 +134,51 @@ pub struct DarcyPoint {
     pub escaped: usize,
 }
 
-/// Runs the column at `d0` with `drag`.
+/// Runs the column at `d0` with `drag` on the CPU backend (f64).
 pub fn darcy_point(d0: f64, drag: Drag) -> Result<DarcyPoint, StudyError> {
-    let case = format!("darcy d0 = {d0}, drag = {}", drag_name(drag));
+    darcy_point_on(d0, drag, Backend::Cpu)
+}
+
+/// Runs the column at `d0` with `drag` on `backend`: the CPU in f64, wgpu in f32.
+pub fn darcy_point_on(d0: f64, drag: Drag, backend: Backend) -> Result<DarcyPoint, StudyError> {
+    let mut scene = filter_column(d0, drag, END)?;
+    match backend {
+        Backend::Wgpu => {
+            scene.backend = Backend::Wgpu;
+            scene.precision = Precision::F32;
+            scene.solver.neighbor_skin = 0.0;
+            run_column::<f32>(&scene, d0, drag)
+        }
+        Backend::Cpu | Backend::Auto => run_column::<f64>(&scene, d0, drag),
+    }
+}
+
+fn run_column<T: Real>(scene: &Scene, d0: f64, drag: Drag) -> Result<DarcyPoint, StudyError> {
+    let case = format!("darcy d0 = {d0}, drag = {}, backend {}", drag_name(drag), scene.backend.name());
     let run_err = |source| StudyError::Run { case: case.clone(), source };
-    let scene = filter_column(d0, drag, END)?;
     let start = Instant::now();
-    let mut a = crate::build::assemble::<f64>(&scene).map_err(|e| run_err(e.into()))?;
+    let mut a = crate::build::assemble::<T>(scene).map_err(|e| run_err(e.into()))?;
     let reach = 2.0 * scene.solver.h();
     let (z0, z1) = (0.1 + 0.5 * d0 + reach, 0.1 + LAYER + 0.5 * d0 - reach);
     let (mut q_sum, mut grad_sum, mut samples, mut exchanges) = (0.0, 0.0, 0.0, 0u64);
     while a.system.fluid.time() < END {
         a.system.advance(Some(END - a.system.fluid.time())).map_err(|e| run_err(e.into()))?;
         exchanges += 1;
-        if a.system.fluid.time() > 0.5 * END
-            && exchanges % 10 == 0
-            && let Some(s) = a.system.fluid.as_cpu()
-        {
-            let (q, g) = flux_and_gradient(s, z0, z1);
+        if a.system.fluid.time() > 0.5 * END && exchanges % 10 == 0 {
+            // A device backend refreshes its host copy here (a no-op on the CPU).
+            a.system.fluid.sync().map_err(|e| run_err(e.into()))?;
+            let (q, g) = flux_and_gradient(a.system.fluid.as_ref(), z0, z1);
             q_sum += q;
             grad_sum += g;
             samples += 1.0;
         }
     }
+    a.system.fluid.sync().map_err(|e| run_err(e.into()))?;
     let wall_s = start.elapsed().as_secs_f64();
-    let Some(s) = a.system.fluid.as_cpu().filter(|_| samples > 0.0) else {
+    if samples == 0.0 {
         return Err(StudyError::Incomplete(format!("{case}: no sample of the steady flow")));
-    };
+    }
+    let s = a.system.fluid.as_ref();
     let g = -scene.solver.gravity[2];
     let gamma = 1000.0 * 9.80665;
     let (q, dpdz) = (q_sum / samples, grad_sum / samples);
@@ -172,6 +195,7 @@ pub fn darcy_point(d0: f64, drag: Drag) -> Result<DarcyPoint, StudyError> {
     Ok(DarcyPoint {
         d0,
         drag: drag_name(drag),
+        backend: scene.backend.name(),
         particles: s.len(),
         exchanges,
         q,
@@ -191,6 +215,8 @@ pub struct DarcyOptions {
     pub spacings: Vec<f64>,
     /// Drag distributions.
     pub drags: Vec<Drag>,
+    /// Backend: `cpu` (f64) or `wgpu` (f32).
+    pub backend: Backend,
     /// Output folder.
     pub out: PathBuf,
 }
@@ -204,9 +230,10 @@ pub fn darcy_study(opts: &DarcyOptions) -> Result<Vec<DarcyPoint>, StudyError> {
     let mut points = Vec::new();
     for &drag in &opts.drags {
         for &d0 in &opts.spacings {
-            let p = darcy_point(d0, drag)?;
+            let p = darcy_point_on(d0, drag, opts.backend)?;
             eprintln!(
-                "darcy: d0 = {d0} m, drag {}: q = {:.4e} m/s, {} against k Δh / L, {} against k i ({:.1} s)",
+                "darcy ({}): d0 = {d0} m, drag {}: q = {:.4e} m/s, {} against k Δh / L, {} against k i ({:.1} s)",
+                p.backend,
                 p.drag,
                 p.q,
                 percent(p.err_heads),
@@ -232,13 +259,14 @@ fn percent(x: f64) -> String {
 /// against `k Δh / L`, Roache's GCI), or why there is none.
 pub fn table(points: &[DarcyPoint]) -> String {
     let mut t = String::from(
-        "| drag | d0 (m) | particles | q (m/s) | vs k Δh / L | vs k i (inside) | wall (s) |\n\
-         |---|---:|---:|---:|---:|---:|---:|\n",
+        "| drag | backend | d0 (m) | particles | q (m/s) | vs k Δh / L | vs k i (inside) | wall (s) |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|\n",
     );
     for p in points {
         t.push_str(&format!(
-            "| {} | {} | {} | {:.4e} | {} | {} | {:.1} |\n",
+            "| {} | {} | {} | {} | {:.4e} | {} | {} | {:.1} |\n",
             p.drag,
+            p.backend,
             p.d0,
             p.particles,
             p.q,
@@ -281,6 +309,7 @@ mod tests {
         DarcyPoint {
             d0,
             drag: "svf",
+            backend: "cpu",
             particles: 1,
             exchanges: 1,
             q,

@@ -83,7 +83,7 @@ pub struct WetSetup<T> {
     /// lowest at the cell's centre). A water particle whose soil volume sum reads at least
     /// this much of the site's sits inside the soil: its porosity is then taken from the
     /// soil's own solid fraction (a Shepard mean) rather than from the kernel sum, whose
-    /// dips between lattice sites would otherwise read as pore space. See [`porosity`].
+    /// dips between lattice sites would otherwise read as pore space. See `cpu::wet::porosity`.
     pub full_support: T,
     /// How the drag is spread over the pairs.
     pub drag: Drag,
