@@ -99,18 +99,11 @@ fn a_rough_contact_is_bit_identical_to_none_and_wrong_contacts_are_one_line_erro
 }
 
 #[test]
-fn smooth_walls_on_wgpu_and_non_rough_bodies_are_refused_in_one_line() {
-    let text = "[simulation]\nend_time = 0.01\nbackend = \"wgpu\"\nprecision = \"f32\"\n\n[sph]\nspacing = 0.02\nneighbor_skin = 0.0\n\n\
+fn non_rough_bodies_are_refused_in_one_line() {
+    let text = "[simulation]\nend_time = 0.01\nprecision = \"f32\"\n\n[sph]\nspacing = 0.02\nneighbor_skin = 0.0\n\n\
          [[materials]]\nname = \"s\"\nmodel = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 2e6\npoisson_ratio = 0.3\nfriction_angle = 30.0\n\n\
          [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.2, 0.2, 0.2]\nsoil_contact = \"smooth\"\n\n[terrain]\nmaterial = \"s\"\ndepth = 0.1\n";
-    let scene = common::scene(text);
-    let e = build_soil::<f32>(&scene).err().expect("wgpu has rough walls only").to_string();
-    assert!(
-        e.contains("key `soil_contact`: smooth and frictional walls run on the CPU backend only (this run is on wgpu)"),
-        "{e}"
-    );
-    assert!(!e.contains('\n'));
-    let body = text.replace("backend = \"wgpu\"\n", "").replace("soil_contact = \"smooth\"\n", "")
+    let body = text.replace("soil_contact = \"smooth\"\n", "")
         + "\n[[bodies]]\nname = \"plate\"\nshape = { type = \"box\", size = [0.05, 0.05, 0.02] }\nmass = 1.0\nposition = [0.1, 0.1, 0.15]\nsoil_contact = \"smooth\"\n";
     let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("inline.toml");
     let e = regolith::scene::load_scene_source(&p, &body, &[]).expect_err("refused").to_string();

@@ -6,6 +6,7 @@
 //!   contiguous z range), so sums round alike and differences come only from the device's
 //!   transcendental functions and fused multiply-adds: 1e-5 of each field's largest magnitude.
 //!   Particles started just above their density floor are held there alike.
+//! - Frictional and smooth container walls the same way (dry and wet).
 //! - The wet loop the same way: a saturated sand block with free water (porosity, pore
 //!   pressure, drag, both marker records), with either drag distribution and a permeable body.
 //! - Variants: a Drucker–Prager-only scene compiles neither the MCC return mapping nor the
@@ -167,6 +168,11 @@ fn pair(text: &str, seed: u64, permeable_body: bool) -> Pair {
     let acc = vec![Vec3::new(0.0f32, 0.0, 2.0); nb];
     SphSolver::set_marker_kinematics(&mut cpu, first_body, &pos, &vel, &acc);
     gpu.set_marker_kinematics(first_body, &pos, &vel, &acc);
+    if scene.wall_contact != regolith_fsi::config::WallContact::Rough {
+        let normals = regolith::build::wall_normals(&terrain, d0);
+        cpu.set_wall_contact(&[scene.wall_contact], &normals).expect("cpu contact");
+        SphSolver::set_wall_contact(&mut gpu, &[scene.wall_contact], &normals).expect("gpu contact");
+    }
     if permeable_body {
         // The slab is a filter: water passes through its markers, the soil does not.
         cpu.set_permeable(&[false, true]).expect("cpu permeable");
@@ -204,6 +210,19 @@ fn wet_kernels_match_their_cpu_twins_with_either_drag() {
     kernels_match(&particle, 4, false, 3);
     kernels_match(WET, 4, true, 3);
     kernels_match(&particle, 4, true, 1);
+}
+
+/// Frictional container walls (dry, μ = 0.3) and smooth ones (wet): the wall contact in both
+/// marker extrapolations (free-slip kinematics, Coulomb traction).
+#[test]
+fn frictional_and_smooth_walls_match_their_cpu_twins() {
+    let friction =
+        MIXED.replace("max = [0.24, 0.2, 0.3]\n", "max = [0.24, 0.2, 0.3]\nsoil_contact = { friction = 0.3 }\n");
+    assert!(friction.contains("friction = 0.3"));
+    kernels_match(&friction, 12, false, 3);
+    let smooth = WET.replace("max = [0.24, 0.2, 0.3]\n", "max = [0.24, 0.2, 0.3]\nsoil_contact = \"smooth\"\n");
+    assert!(smooth.contains("smooth"));
+    kernels_match(&smooth, 13, false, 3);
 }
 
 #[test]

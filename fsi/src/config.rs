@@ -143,6 +143,29 @@ impl WallContact {
             Self::Friction(m) => m,
         }
     }
+
+    /// Checks what a backend's `set_wall_contact` is given: at most one normal per marker
+    /// (`markers` of them), each zero or of unit length, and finite, non-negative friction
+    /// coefficients. The message names the marker or owner.
+    pub fn check(contact: &[Self], normals: &[[f64; 3]], markers: usize) -> Result<(), String> {
+        if normals.len() > markers {
+            return Err(format!("{} wall normals for {markers} markers", normals.len()));
+        }
+        if let Some((i, n)) = normals.iter().enumerate().find(|(_, n)| {
+            let l2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+            !(l2 == 0.0 || (l2 - 1.0).abs() < 1e-9)
+        }) {
+            return Err(format!("marker {i}: wall normal {n:?} is neither zero nor of unit length"));
+        }
+        for (o, c) in contact.iter().enumerate() {
+            if let Self::Friction(m) = c
+                && !(m.is_finite() && *m >= 0.0)
+            {
+                return Err(format!("owner {o}: friction coefficient {m} must be finite and ≥ 0"));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Everything the SPH solver needs besides particles and materials.

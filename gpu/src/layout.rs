@@ -97,7 +97,8 @@ pub struct Rate {
     pub pad: f32,
 }
 
-/// A boundary marker (original order): kinematics and owner.
+/// A boundary marker (original order): kinematics, owner, and the wall's unit normal into the
+/// soil (zero: the marker is rough whatever its owner's contact).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct Marker {
@@ -105,6 +106,7 @@ pub struct Marker {
     pub vel: [f32; 3],
     pub acc: [f32; 3],
     pub owner: u32,
+    pub normal: [f32; 3],
 }
 
 /// Step bookkeeping (see `Info` in common.wgsl); maxima are f32 bit patterns.
@@ -208,7 +210,7 @@ mod tests {
         assert_eq!(size_of::<Particle>(), 20 * 4);
         assert_eq!(size_of::<Packed>(), 16 * 4);
         assert_eq!(size_of::<Rate>(), 26 * 4);
-        assert_eq!(size_of::<Marker>(), 10 * 4);
+        assert_eq!(size_of::<Marker>(), 13 * 4);
         assert_eq!(size_of::<Info>(), 13 * 4);
         assert_eq!(size_of::<Material>(), 20 * 4);
         assert_eq!(size_of::<Body>(), 24 * 4);

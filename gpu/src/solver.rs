@@ -86,6 +86,8 @@ struct Buffers {
     markers_read: wgpu::Buffer,
     parts_read: wgpu::Buffer,
     rates_read: wgpu::Buffer,
+    /// μ per owner (0 = walls, k + 1 = body k): infinite for rough.
+    owner_mu: wgpu::Buffer,
 }
 
 struct Groups {
@@ -468,7 +470,9 @@ impl GpuSph {
             markers_read: mk("markers.read", sz(nm, size_of::<Marker>()), read),
             parts_read: mk("particles.read", sz(n, size_of::<Particle>()), read),
             rates_read: mk("rates.read", sz(n, size_of::<Rate>()), read),
+            owner_mu: mk("owners.mu", sz(n_bodies + 1, 4), USAGE),
         };
+        queue.write_buffer(&b.owner_mu, 0, bytemuck::cast_slice(&vec![f32::INFINITY; n_bodies + 1]));
         let gpu_mats: Vec<layout::Material> = materials.iter().map(gpu_material).collect();
         queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&params));
         queue.write_buffer(&b.materials, 0, bytemuck::cast_slice(&gpu_mats));
@@ -562,6 +566,7 @@ impl GpuSph {
                         (4, p),
                         (5, &b.start),
                         (6, &b.m_packed),
+                        (7, &b.owner_mu),
                     ],
                 )
             }),
@@ -657,7 +662,8 @@ impl GpuSph {
                             13 => &b.m_sorted,
                             14 => &owner_perm,
                             15 => &b.m_order,
-                            _ => &b.m_force,
+                            16 => &b.m_force,
+                            _ => &b.owner_mu,
                         }
                     };
                     let entries: Vec<(u32, &wgpu::Buffer)> = used.iter().map(|&u| (u, buf(u))).collect();
@@ -1106,6 +1112,24 @@ impl SphSolver<f32> for GpuSph {
     }
     fn variants(&self) -> Vec<String> {
         self.variants.clone()
+    }
+    fn set_wall_contact(
+        &mut self,
+        contact: &[regolith_fsi::config::WallContact],
+        normals: &[[f64; 3]],
+    ) -> Result<(), SolverError> {
+        regolith_fsi::config::WallContact::check(contact, normals, self.nm).map_err(SolverError::Setup)?;
+        let mu: Vec<f32> =
+            (0..=self.n_bodies).map(|o| contact.get(o).map_or(f32::INFINITY, |c| c.mu() as f32)).collect();
+        self.queue.write_buffer(&self.b.owner_mu, 0, bytemuck::cast_slice(&mu));
+        for (i, m) in self.m_host.iter_mut().enumerate() {
+            m.normal = normals.get(i).map_or([0.0; 3], |n| n.map(|x| x as f32));
+        }
+        if self.nm > 0 {
+            self.queue.write_buffer(&self.b.markers, 0, bytemuck::cast_slice(&self.m_host));
+        }
+        self.markers_dirty = true;
+        Ok(())
     }
     fn set_permeable(&mut self, permeable: &[bool]) -> Result<(), SolverError> {
         let Some(w) = &self.wet else {

@@ -74,17 +74,6 @@ pub enum BuildError {
         /// The backend of the run.
         backend: String,
     },
-    /// Smooth or frictional soil contact was asked for on a backend without it.
-    #[error(
-        "{}: key `soil_contact`: smooth and frictional walls run on the CPU backend only (this run is on {backend}); set [simulation] backend = \"cpu\" or remove soil_contact",
-        file.display()
-    )]
-    ContactBackend {
-        /// The scene file.
-        file: std::path::PathBuf,
-        /// The backend of the run.
-        backend: String,
-    },
     /// Terrain scenes need a container.
     #[error("a scene needs a [container]")]
     NoContainer,
@@ -226,7 +215,7 @@ pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, BuildError> {
 }
 
 /// Hands the walls' and bodies' soil contacts to the solver (owner 0 the walls, k + 1 the k-th
-/// FSI body); a backend with rough walls only refuses the others with the keys named.
+/// FSI body).
 fn set_contacts<T: Real>(
     solver: &mut dyn SphSolver<T>,
     scene: &Scene,
@@ -237,9 +226,6 @@ fn set_contacts<T: Real>(
     if all_rough {
         return Ok(());
     }
-    if solver.backend() != "cpu" {
-        return Err(BuildError::ContactBackend { file: scene.path.clone(), backend: solver.backend().into() });
-    }
     let normals = wall_normals(terrain, scene.solver.spacing);
     solver.set_wall_contact(contacts, &normals).map_err(BuildError::Solver)
 }
@@ -248,7 +234,7 @@ fn set_contacts<T: Real>(
 /// first in the solver's marker order): the sum of the inward normals of the faces whose plane
 /// the marker lies on or behind (markers sit on the lattice, the first layer on each wall
 /// plane), normalised, so that edges and corners get the diagonal.
-fn wall_normals(terrain: &TerrainBuild, d0: f64) -> Vec<[f64; 3]> {
+pub fn wall_normals(terrain: &TerrainBuild, d0: f64) -> Vec<[f64; 3]> {
     let c = &terrain.container;
     terrain
         .markers

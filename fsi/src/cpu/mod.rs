@@ -541,28 +541,7 @@ impl<T: Real> CpuSph<T> {
         contact: &[crate::config::WallContact],
         normals: &[[f64; 3]],
     ) -> Result<(), SolverError> {
-        if normals.len() > self.m_owner.len() {
-            return Err(SolverError::Setup(format!(
-                "{} wall normals for {} markers",
-                normals.len(),
-                self.m_owner.len()
-            )));
-        }
-        if let Some((i, n)) = normals.iter().enumerate().find(|(_, n)| {
-            let l2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-            !(l2 == 0.0 || (l2 - 1.0).abs() < 1e-9)
-        }) {
-            return Err(SolverError::Setup(format!(
-                "marker {i}: wall normal {n:?} is neither zero nor of unit length"
-            )));
-        }
-        for (o, c) in contact.iter().enumerate() {
-            if let crate::config::WallContact::Friction(m) = c
-                && !(m.is_finite() && *m >= 0.0)
-            {
-                return Err(SolverError::Setup(format!("owner {o}: friction coefficient {m} must be finite and ≥ 0")));
-            }
-        }
+        crate::config::WallContact::check(contact, normals, self.m_owner.len()).map_err(SolverError::Setup)?;
         let owners = self.m_owner.iter().map(|&o| o as usize + 1).max().unwrap_or(0).max(contact.len());
         if contact.iter().all(|c| *c == crate::config::WallContact::Rough) {
             self.owner_mu = Vec::new();

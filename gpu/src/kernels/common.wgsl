@@ -45,6 +45,7 @@ struct Marker {
     vx: f32, vy: f32, vz: f32,
     ax: f32, ay: f32, az: f32,
     owner: u32,
+    nx: f32, ny: f32, nz: f32,
 }
 
 // Step bookkeeping on the device. `active` and `dt` persist; the rest is reset every step.
@@ -194,6 +195,37 @@ fn pair_term(pa: Packed, pb: Packed, r: vec3<f32>, r2: f32, gw: vec3<f32>, vab: 
         ga = ga - gw * pi;
     }
     return ga;
+}
+
+// The symmetric product a (x) b + b (x) a.
+fn sym_outer(a: vec3<f32>, b: vec3<f32>) -> Sym {
+    return Sym(a.x * b.x + a.x * b.x, a.y * b.y + a.y * b.y, a.z * b.z + a.z * b.z,
+        a.x * b.y + b.x * a.y, a.x * b.z + b.x * a.z, a.y * b.z + b.y * a.z);
+}
+
+// A marker's extrapolated velocity and stress. Rough (mu not finite, or no wall normal): the
+// mirrored velocity 2 v_b - v_bar and the stress as extrapolated. Otherwise the wall contact of
+// coefficient mu: free-slip kinematics (the normal relative velocity mirrored, the tangential
+// one carried through) and the traction's tangential part replaced by regularised Coulomb
+// friction, s_hat min(mu max(-t.n, 0), Z |u|), Z = rho c the soil's impedance. CPU twin:
+// `rates::apply_contact` through `ContactView::of`.
+struct WallState { v: vec3<f32>, s: Sym }
+
+fn wall_state(mk: Marker, mu: f32, impedance: f32, vbar: vec3<f32>, sigma: Sym) -> WallState {
+    let vb = vec3<f32>(mk.vx, mk.vy, mk.vz);
+    let n = vec3<f32>(mk.nx, mk.ny, mk.nz);
+    if (!(dot(n, n) > 0.0) || !finite(mu)) { return WallState(vb * 2.0 - vbar, sigma); }
+    let t = sym_mul_vec(sigma, n);
+    let tn = dot(t, n);
+    let tt = t - n * tn;
+    let rel = vb - vbar;
+    let rel_n = n * dot(rel, n);
+    let v = vbar + rel_n * 2.0;
+    let slip = rel_n - rel;
+    let s = length(slip);
+    var friction = vec3<f32>(0.0);
+    if (s > 0.0 && mu > 0.0) { friction = slip * (min(mu * max(-tn, 0.0), impedance * s) / s); }
+    return WallState(v, sym_add(sym_sub(sigma, sym_outer(tt, n)), sym_outer(friction, n)));
 }
 
 // max over non-negative floats with a u32 atomic: their bit patterns order like the values.

@@ -14,7 +14,7 @@ impl Extrapolate {
         let layout = layout(
             device,
             "extrapolate",
-            &[(0, Uniform), (1, Read), (2, Read), (3, Read), (4, Read), (5, Read), (6, ReadWrite)],
+            &[(0, Uniform), (1, Read), (2, Read), (3, Read), (4, Read), (5, Read), (6, ReadWrite), (7, Read)],
         );
         let src = source(e, &Variant::default(), include_str!("extrapolate.wgsl"), false);
         let extrapolate = pipelines(device, "extrapolate", &src, &layout, &["extrapolate"])?

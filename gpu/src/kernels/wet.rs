@@ -31,7 +31,7 @@ pub(crate) mod bindings {
     pub const MARKER_SOLIDS: &[u32] = &[0, 1, 2, 5, 11, 12, 13, 14];
     pub const POROSITY: &[u32] = &[0, 1, 2, 5, 9, 11, 12, 13];
     pub const SOIL_PRESSURES: &[u32] = &[0, 1, 2, 9, 11];
-    pub const EXTRAPOLATE: &[u32] = &[0, 1, 2, 3, 4, 5, 7, 11, 12, 13];
+    pub const EXTRAPOLATE: &[u32] = &[0, 1, 2, 3, 4, 5, 7, 11, 12, 13, 17];
     pub const RATES: &[u32] = &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12];
     pub const MARKER_FORCES: &[u32] = &[0, 1, 2, 3, 4, 5, 11, 12, 15, 16];
     pub const PARTICLE_STATE: &[u32] = &[0, 7, 9, 11];

@@ -34,6 +34,7 @@
 @group(0) @binding(14) var<storage, read> owner_perm: array<u32>;
 @group(0) @binding(15) var<storage, read> m_order: array<u32>;
 @group(0) @binding(16) var<storage, read_write> m_force: array<f32>;
+@group(0) @binding(17) var<storage, read> owner_mu: array<f32>;
 
 // What the coupling knows of a particle at a stage. water/vg/inv_k: its phase (soil: grain
 // volume m / rho_g over the lattice sum, and 1/k; water: 0); n, p, cw, inv_sum: water's
@@ -291,8 +292,8 @@ fn soil_pressures(@builtin(global_invocation_id) gid: vec3<u32>) {
     pore[i].p = p;
 }
 
-// A marker record from the sums of one phase (Adami et al. 2012; rough walls), or the
-// reference record where that phase has no particle in reach.
+// A marker record from the sums of one phase (Adami et al. 2012, with the owner's wall
+// contact), or the reference record where that phase has no particle in reach.
 fn wall_record(xw: vec3<f32>, mk: Marker, sw: f32, sv: vec3<f32>, ss: Sym, srr: vec3<f32>, srho: f32, scs: f32, ref_rho: f32, ref_cs: f32) -> Packed {
     let vb = vec3<f32>(mk.vx, mk.vy, mk.vz);
     if (sw > tiny()) {
@@ -300,9 +301,9 @@ fn wall_record(xw: vec3<f32>, mk: Marker, sw: f32, sv: vec3<f32>, ss: Sym, srr: 
         let rho = srho * inv;
         let g = vec3<f32>(prm.g_x, prm.g_y, prm.g_z);
         let dp = dot(g - vec3<f32>(mk.ax, mk.ay, mk.az), srr) * inv;
-        let sigma = sym_sub(sym_scale(ss, inv), sym_iso(dp));
-        let s = sym_scale(sigma, 1.0 / (rho * rho));
-        let v = vb * 2.0 - sv * inv;
+        let w = wall_state(mk, owner_mu[mk.owner], rho * scs * inv, sv * inv, sym_sub(sym_scale(ss, inv), sym_iso(dp)));
+        let s = sym_scale(w.s, 1.0 / (rho * rho));
+        let v = w.v;
         return Packed(xw.x, xw.y, xw.z, v.x, v.y, v.z, s.xx, s.yy, s.zz, s.xy, s.xz, s.yz,
             prm.m_volume, rho * prm.m_volume, rho, scs * inv);
     }
