@@ -446,6 +446,52 @@ fn geostatic_box_stresses_agree_within_one_percent() {
     }
 }
 
+/// A saturated sand bed at rest (0.15 m deep, water to its surface, d0 = 2 cm, 0.04 s) on
+/// both backends: each layer's mean pore pressure (the water's p) and mean effective stress
+/// (the soil's p) agree within 1 % of the largest, and the water rises no faster than
+/// hydrostatic ringing allows on either.
+#[test]
+fn a_saturated_bed_at_rest_agrees_layer_by_layer() {
+    let text = "[simulation]\nend_time = 0.04\nprecision = \"f32\"\n\n[sph]\nspacing = 0.02\n\n\
+         [[materials]]\nname = \"sand\"\nmodel = \"drucker-prager\"\ndensity = 1600\ngrain_density = 2650\n\
+         permeability = 1e-3\nyoungs_modulus = 1e7\npoisson_ratio = 0.3\nfriction_angle = 30.0\n\n\
+         [[materials]]\nname = \"water\"\nmodel = \"water\"\ndensity = 1000\nsound_speed = 100\nviscosity = 1e-3\n\n\
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.1, 0.1, 0.2]\n\n[terrain]\nmaterial = \"sand\"\ndepth = 0.16\n\n\
+         [[water_blocks]]\nmaterial = \"water\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.1, 0.1, 0.16]\n";
+    let scene = common::scene(text);
+    let [(c, cdir), (g, gdir)] = both(&scene, "saturated_bed");
+    assert_eq!(c.particles, g.particles);
+    assert!(
+        c.max_speed_run < 2e-2 && g.max_speed_run < 2e-2,
+        "at rest: {} (cpu), {} (wgpu) m/s",
+        c.max_speed_run,
+        g.max_speed_run
+    );
+    // Mean p of each layer and phase: (layer, material) -> (sum, count).
+    let layers = |dir: &std::path::Path| {
+        let (h, rows) = csv(&dir.join("particles_final.csv"));
+        let col = |n: &str| h.iter().position(|x| x == n).expect("column");
+        let (z, p, mat) = (col("z"), col("p"), col("material"));
+        let mut m = std::collections::BTreeMap::<(i64, i64), (f64, f64)>::new();
+        for r in rows {
+            let e = m.entry(((r[z] / 0.02).round() as i64, r[mat] as i64)).or_default();
+            e.0 += r[p];
+            e.1 += 1.0;
+        }
+        m
+    };
+    let (a, b) = (layers(&cdir), layers(&gdir));
+    assert!(a.keys().filter(|k| k.1 == 1).count() >= 7, "water layers: {:?}", a.keys());
+    let pmax = a.values().map(|v| v.0 / v.1).fold(0.0, f64::max);
+    for (k, va) in &a {
+        let vb = b.get(k).expect("same layers");
+        assert_eq!(va.1, vb.1, "layer {k:?} count");
+        let (x, y) = (va.0 / va.1, vb.0 / vb.1);
+        eprintln!("layer {} {}: p = {x:.1} Pa (cpu), {y:.1} Pa (wgpu)", k.0, if k.1 == 1 { "water" } else { "soil" });
+        assert!((x - y).abs() <= 0.01 * pmax, "layer {k:?}: p {x} (cpu) vs {y} (wgpu)");
+    }
+}
+
 #[test]
 fn column_collapse_runout_agrees_within_two_percent() {
     // 0.25 s: mid-flow (runout 0.70 of the 1.05 it reaches at 0.4 s), where a divergence

@@ -2,8 +2,9 @@
 //!
 //! The wgpu backend of Regolith's SPH soil: every stage of the CPU step (cell binning and
 //! sort, neighbour loops, rates, Jaumann update, the Drucker–Prager and Modified Cam Clay return
-//! mappings, RK2/Euler, shifting, free surface, wall and body markers) as a WGSL compute kernel,
-//! with all particle state resident on the device. f32 only.
+//! mappings, RK2/Euler, shifting, free surface, wall and body markers with rough, smooth or
+//! frictional contact, and the wet loop of a scene with water) as a WGSL compute kernel, with
+//! all particle state resident on the device. f32 only.
 //!
 //! The library never creates a device: [`GpuSph::new`] takes the caller's `wgpu::Device` and
 //! `wgpu::Queue` (the `regolith` facade opens them). Kernels are specialised to the scene's

@@ -178,6 +178,8 @@ pub struct GpuSph {
     mirror: Mirror,
     /// Wet scenes only.
     wet: Option<WetParts>,
+    /// Markers given a wall normal by the last `set_wall_contact` (the first ones).
+    normals_set: usize,
 }
 
 const USAGE: wgpu::BufferUsages =
@@ -716,6 +718,7 @@ impl GpuSph {
             m_force: vec![Vec3::zero(); nm],
             mirror: Mirror::default(),
             wet,
+            normals_set: 0,
         };
         s.sync().map_err(|e| GpuError::Device(e.to_string()))?;
         s.sync_diagnostics()?;
@@ -1122,12 +1125,16 @@ impl SphSolver<f32> for GpuSph {
         let mu: Vec<f32> =
             (0..=self.n_bodies).map(|o| contact.get(o).map_or(f32::INFINITY, |c| c.mu() as f32)).collect();
         self.queue.write_buffer(&self.b.owner_mu, 0, bytemuck::cast_slice(&mu));
-        for (i, m) in self.m_host.iter_mut().enumerate() {
+        // Only the markers that have or had a normal (the walls, which come first) are
+        // rewritten: body markers placed on the device are newer there than on the host.
+        let upto = normals.len().max(self.normals_set).min(self.nm);
+        for (i, m) in self.m_host[..upto].iter_mut().enumerate() {
             m.normal = normals.get(i).map_or([0.0; 3], |n| n.map(|x| x as f32));
         }
-        if self.nm > 0 {
-            self.queue.write_buffer(&self.b.markers, 0, bytemuck::cast_slice(&self.m_host));
+        if upto > 0 {
+            self.queue.write_buffer(&self.b.markers, 0, bytemuck::cast_slice(&self.m_host[..upto]));
         }
+        self.normals_set = normals.len();
         self.markers_dirty = true;
         Ok(())
     }

@@ -139,7 +139,8 @@ pub fn darcy_point(d0: f64, drag: Drag) -> Result<DarcyPoint, StudyError> {
     darcy_point_on(d0, drag, Backend::Cpu)
 }
 
-/// Runs the column at `d0` with `drag` on `backend`: the CPU in f64, wgpu in f32.
+/// Runs the column at `d0` with `drag` on `backend`: the CPU in f64, wgpu in f32 (`auto` is
+/// refused: a study names the backend its numbers come from).
 pub fn darcy_point_on(d0: f64, drag: Drag, backend: Backend) -> Result<DarcyPoint, StudyError> {
     let mut scene = filter_column(d0, drag, END)?;
     match backend {
@@ -149,7 +150,8 @@ pub fn darcy_point_on(d0: f64, drag: Drag, backend: Backend) -> Result<DarcyPoin
             scene.solver.neighbor_skin = 0.0;
             run_column::<f32>(&scene, d0, drag)
         }
-        Backend::Cpu | Backend::Auto => run_column::<f64>(&scene, d0, drag),
+        Backend::Cpu => run_column::<f64>(&scene, d0, drag),
+        Backend::Auto => Err(InputError::flag("--backend", "a study runs on cpu or wgpu, not auto").into()),
     }
 }
 
