@@ -972,19 +972,10 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             calibrate::triaxial(a.inputs()?)
         }
         Command::Study { study: StudyCommand::Darcy { spacings, drag, backend, out } } => {
+            // Without an adapter the first point says so in one line (`darcy_point_on`).
             let backend = match backend {
                 StudyBackendArg::Cpu => crate::scene::Backend::Cpu,
-                StudyBackendArg::Wgpu => {
-                    // An adapter must exist (lavapipe counts): said before any run, as one line.
-                    let mut probe = crate::study::darcy::filter_column(0.02, regolith_fsi::config::Drag::Svf, 0.1)
-                        .map_err(Failure::Input)?;
-                    probe.backend = crate::scene::Backend::Wgpu;
-                    probe.precision = crate::scene::Precision::F32;
-                    probe.precision_set = false;
-                    crate::build::backend::resolve_backend(&mut probe)
-                        .map_err(|e| Failure::Input(InputError::flag("--backend", e)))?;
-                    crate::scene::Backend::Wgpu
-                }
+                StudyBackendArg::Wgpu => crate::scene::Backend::Wgpu,
             };
             let drags = drag
                 .into_iter()

@@ -145,9 +145,12 @@ pub fn darcy_point_on(d0: f64, drag: Drag, backend: Backend) -> Result<DarcyPoin
     let mut scene = filter_column(d0, drag, END)?;
     match backend {
         Backend::Wgpu => {
+            // The column is written in f64 for the CPU; on wgpu it runs in f32, and the run
+            // takes the backend as `regolith run --backend wgpu` would (an adapter must exist).
             scene.backend = Backend::Wgpu;
             scene.precision = Precision::F32;
-            scene.solver.neighbor_skin = 0.0;
+            scene.precision_set = false;
+            crate::build::backend::resolve_backend(&mut scene).map_err(|e| InputError::flag("--backend", e))?;
             run_column::<f32>(&scene, d0, drag)
         }
         Backend::Cpu => run_column::<f64>(&scene, d0, drag),
