@@ -272,6 +272,10 @@ impl Timed {
 pub struct WheelBenchResult {
     /// Active region on.
     pub active: bool,
+    /// Backend (`cpu` or `wgpu`).
+    pub backend: String,
+    /// Device adapter (`cpu` for the CPU backend).
+    pub adapter: String,
     /// Moving patch length (m), if one.
     pub patch: Option<f64>,
     /// Soil particles in the bed.
@@ -325,6 +329,8 @@ pub fn run_wheel_long(scene: &Scene, warmup: u64, exchanges: u64) -> Result<Whee
     let f = &sim.system.fluid;
     Ok(WheelBenchResult {
         active: scene.active.is_some(),
+        backend: f.backend().into(),
+        adapter: f.adapter(),
         patch: scene.patch.map(|p| p.length),
         particles: f.len(),
         markers: f.marker_positions().len(),

@@ -1,6 +1,6 @@
 //! Active domains (`[sph.active]`): sleeping soil keeps its state bit for bit and wakes
 //! without a jump, a wheel run gives the full-domain drawbar pull, torque and sinkage, a scene
-//! without FSI bodies stays awake everywhere, and the wgpu backend refuses what it cannot do.
+//! without FSI bodies stays awake everywhere. The wgpu backend's twin: `wgpu_parity.rs`.
 
 use crate::common;
 
@@ -157,15 +157,4 @@ fn a_wheel_on_an_active_domain_pulls_sinks_and_turns_as_on_the_full_bed() {
     let awake = on["active"]["awake_mean"].as_f64().expect("awake count");
     let n = on["particles"].as_f64().expect("particles");
     assert!(awake < 0.8 * n, "part of the bed must sleep: {awake} of {n} awake");
-}
-
-#[test]
-fn the_wgpu_backend_refuses_active_domains_naming_the_key() {
-    let text = glider("\n[sph.active]\nenabled = true\n").replace("precision = \"f32\"", "backend = \"wgpu\"");
-    let scene = common::scene(&text);
-    let e = Simulation::<f32>::new(&scene).err().expect("refused").to_string();
-    let head =
-        format!("{}: key `sph.active.enabled`: active domains run on the CPU backend only", scene.path.display());
-    assert!(e.starts_with(&head), "{e}");
-    assert!(!e.contains('\n'), "one line: {e}");
 }

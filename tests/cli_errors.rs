@@ -406,6 +406,16 @@ fn bench_flags_that_do_not_apply_to_the_scene_are_one_line_errors() {
         &["bench", "--scene", "column", "--patch", "3"],
         "applies to --scene wheel-long or rover-patch",
     );
+    assert_one_line_error(&["bench", "--scene", "rover-patch", "--backend", "wgpu"], "--backend: rover-patch runs on");
+    assert_one_line_error(
+        &["bench", "--scene", "wheel-long", "--backend", "wgpu", "--patch", "3"],
+        "--patch: the moving patch runs on the CPU backend only",
+    );
+    assert_one_line_error(&["bench", "--scene", "wheel-long", "--precision", "f64"], "--precision: wheel-long");
+    assert_one_line_error(
+        &["bench", "--scene", "wheel-long", "--backend", "wgpu", "--skin", "0.3"],
+        "--skin: the wgpu backend rebuilds",
+    );
 }
 
 /// The rover-patch bench runs the example rover on the whole bed and on a patch, in one run:

@@ -67,6 +67,8 @@ pub struct Particle {
 pub const FLAG_FREE: u32 = 1;
 /// Flag bit: detached (no stress).
 pub const FLAG_DETACHED: u32 = 2;
+/// Flag: extended particle of an active region (a neighbour only, its state frozen).
+pub const FLAG_FROZEN: u32 = 4;
 
 /// What a neighbour reads of a particle or marker.
 #[repr(C)]
@@ -127,6 +129,8 @@ pub struct Info {
     pub amax_end: u32,
     /// Largest drag rate λ = Σ C V W / m of the first stage (1/s, wet scenes).
     pub drag: u32,
+    /// Set when an awake particle left the cells awake particles may be in (active regions).
+    pub uncovered: u32,
 }
 
 /// What the phase coupling knows of a particle at a stage (see `Pore` in wet.wgsl; CPU twins

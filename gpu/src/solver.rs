@@ -3,10 +3,11 @@
 use std::sync::mpsc;
 
 use bytemuck::Zeroable;
+use regolith_fsi::active::ActiveDomain;
 use regolith_fsi::config::{
     DETACHED_THRESHOLD, Drag, FreeSurfaceStress, Integrator, KernelKind, SolverConfig, TimeStep,
 };
-use regolith_fsi::cpu::{GridSpec, WetSetup, lattice_sums};
+use regolith_fsi::cpu::{ActiveRegion, Classification, GridSpec, WetSetup, lattice_sums};
 use regolith_fsi::kernel::{CubicSpline, Kernel, WendlandC2};
 use regolith_fsi::math::{Sym3, Vec3};
 use regolith_fsi::rheology::{Material, PointState, Rheology, RheologyError};
@@ -14,8 +15,8 @@ use regolith_fsi::{BodyMarkers, BodyState, MarkerInit, ParticleInit, SolverError
 
 use crate::GpuError;
 use crate::kernels::{
-    advance::Advance, bodies::Bodies, dispatch, extrapolate::Extrapolate, forces::Forces, pack::Pack, permute::Permute,
-    rates::Rates, scan::Scan, sort::Sort, step_info::StepInfo, wet::Wet,
+    active::Cover, advance::Advance, bodies::Bodies, dispatch, extrapolate::Extrapolate, forces::Forces, pack::Pack,
+    permute::Permute, rates::Rates, scan::Scan, sort::Sort, step_info::StepInfo, wet::Wet,
 };
 use crate::layout::{self, Body, Info, Marker, MarkerPore, Packed, Params, Particle, Pore, Rate};
 use crate::shader::{Effects, bind, groups};
@@ -126,6 +127,17 @@ struct WetParts {
     ready: bool,
 }
 
+/// An active region on the device (see `regolith_fsi::active`): the check after each step and
+/// the cells awake particles may be in (1 per allowed cell). The classification is made on the
+/// host by the CPU's own code ([`ActiveRegion`]), so both backends give every particle the same
+/// role; the device then sorts, searches and steps only the awake and extended particles
+/// (first in the particle buffer, extended ones flagged `FLAG_FROZEN`).
+struct ActiveParts {
+    k: Cover,
+    cells: wgpu::Buffer,
+    group: wgpu::BindGroup,
+}
+
 /// Host copy of the particles, refreshed by `sync`.
 #[derive(Default)]
 struct Mirror {
@@ -140,6 +152,8 @@ struct Mirror {
     flags: Vec<u32>,
     acc: Vec<Vec3<f32>>,
     fs: Vec<f32>,
+    /// Device index of each host entry.
+    order: Vec<u32>,
 }
 
 /// SPH soil on a wgpu device, in f32.
@@ -180,6 +194,21 @@ pub struct GpuSph {
     wet: Option<WetParts>,
     /// Markers given a wall normal by the last `set_wall_contact` (the first ones).
     normals_set: usize,
+    /// The active region kept (shared with the CPU backend).
+    region: ActiveRegion,
+    /// Its kernel and cell mask, once a domain is set.
+    act: Option<ActiveParts>,
+    /// Particles the device sorts and steps: awake and extended while the region is kept
+    /// (`partitioned`), all of them otherwise.
+    live: usize,
+    /// The particle buffer is in the order of a classification: awake and extended (flagged
+    /// frozen) first, then asleep, then outside.
+    partitioned: bool,
+    /// Awake and asleep particles at the last classification.
+    awake: usize,
+    asleep: usize,
+    /// Some awake particle left the cells it may be in during the last step.
+    uncovered: bool,
 }
 
 const USAGE: wgpu::BufferUsages =
@@ -602,6 +631,7 @@ impl GpuSph {
                     (4, &b.packed),
                     (5, &b.start),
                     (6, &b.m_force),
+                    (7, &b.parts),
                 ],
             ),
             info: bind(
@@ -719,6 +749,13 @@ impl GpuSph {
             mirror: Mirror::default(),
             wet,
             normals_set: 0,
+            region: ActiveRegion::default(),
+            act: None,
+            live: n,
+            partitioned: false,
+            awake: n,
+            asleep: 0,
+            uncovered: false,
         };
         s.sync().map_err(|e| GpuError::Device(e.to_string()))?;
         s.sync_diagnostics()?;
@@ -735,6 +772,12 @@ impl GpuSph {
         &self.grid
     }
 
+    /// Awake and extended particles (extended ones: `awake()..near()` of the host copy); all of
+    /// them while no active region is kept.
+    pub fn near(&self) -> usize {
+        if self.partitioned { self.live } else { self.active }
+    }
+
     /// Free-surface flags of the last step (host copy, after `sync`).
     pub fn free_surface(&self) -> Vec<bool> {
         self.mirror.flags.iter().map(|f| f & layout::FLAG_FREE != 0).collect()
@@ -747,25 +790,26 @@ impl GpuSph {
 
     /// Accelerations of the last stage (host copy, after `sync_diagnostics`).
     pub fn accelerations(&self) -> &[Vec3<f32>] {
-        &self.mirror.acc[..self.active]
+        &self.mirror.acc[..SphSolver::awake(self)]
     }
 
     /// Free-surface measure of the last first stage (host copy, after `sync_diagnostics`).
     pub fn free_surface_measure(&self) -> &[f32] {
-        &self.mirror.fs[..self.active]
+        &self.mirror.fs[..SphSolver::awake(self)]
     }
 
     fn record_sort(&self, enc: &mut wgpu::CommandEncoder) {
         let (k, b, g) = (&self.k, &self.b, &self.g);
+        let live = self.live;
         enc.clear_buffer(&b.counts, 0, None);
-        dispatch(enc, &k.sort_soil.bin, &g.sort_soil, groups(self.n));
+        dispatch(enc, &k.sort_soil.bin, &g.sort_soil, groups(live));
         k.scan.record(enc, &g.scan_soil);
         enc.clear_buffer(&b.counts, 0, None);
-        dispatch(enc, &k.sort_soil.scatter, &g.sort_soil, groups(self.n));
+        dispatch(enc, &k.sort_soil.scatter, &g.sort_soil, groups(live));
         dispatch(enc, &k.sort_soil.order_bins, &g.sort_soil, groups(self.n_cells + 1));
-        dispatch(enc, &k.permute.permute_particles, &g.permute, groups(self.n));
-        if self.n > 0 {
-            enc.copy_buffer_to_buffer(&b.tmp, 0, &b.parts, 0, Some((self.n * size_of::<Particle>()) as u64));
+        dispatch(enc, &k.permute.permute_particles, &g.permute, groups(live));
+        if live > 0 {
+            enc.copy_buffer_to_buffer(&b.tmp, 0, &b.parts, 0, Some((live * size_of::<Particle>()) as u64));
         }
         dispatch(enc, &k.permute.set_active, &g.set_active, 1);
         if self.markers_dirty {
@@ -784,7 +828,7 @@ impl GpuSph {
         let (k, g) = (&self.k, &self.g);
         if let Some(w) = &self.wet {
             self.record_pores(enc, w, from);
-            let (kw, n, nm) = (&w.k, groups(self.n), groups(self.nm));
+            let (kw, n, nm) = (&w.k, groups(self.live), groups(self.nm));
             dispatch(enc, &kw.extrapolate.pipeline, &w.extrapolate[from], nm);
             dispatch(enc, &kw.rates[from].pipeline, &w.rates[from], n);
             if forces {
@@ -793,10 +837,10 @@ impl GpuSph {
             }
             return;
         }
-        dispatch(enc, &k.pack.pack, &g.pack[from], groups(self.n));
+        dispatch(enc, &k.pack.pack, &g.pack[from], groups(self.live));
         dispatch(enc, &k.extrapolate.extrapolate, &g.extrapolate[from], groups(self.nm));
         let rates = if from == 0 { &k.rates.first } else { &k.rates.second };
-        dispatch(enc, rates, &g.rates[from], groups(self.n));
+        dispatch(enc, rates, &g.rates[from], groups(self.live));
         if forces {
             enc.clear_buffer(&self.b.m_force, 0, None);
             dispatch(enc, &k.forces.marker_forces, &g.forces, groups(self.nm));
@@ -807,7 +851,7 @@ impl GpuSph {
     /// records packed, phases, the markers' solid shares, the water's porosity and pressure,
     /// the soil's saturation and interpolated pore pressure.
     fn record_pores(&self, enc: &mut wgpu::CommandEncoder, w: &WetParts, from: usize) {
-        let (kw, n, nm) = (&w.k, groups(self.n), groups(self.nm));
+        let (kw, n, nm) = (&w.k, groups(self.live), groups(self.nm));
         dispatch(enc, &self.k.pack.pack, &self.g.pack[from], n);
         dispatch(enc, &kw.phases.pipeline, &w.phases, n);
         dispatch(enc, &kw.marker_solids.pipeline, &w.marker_solids, nm);
@@ -846,6 +890,18 @@ impl GpuSph {
 
     fn step_gpu(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
         let dev = |e: GpuError| SolverError::Setup(format!("wgpu: {e}"));
+        // The active region, as the CPU keeps it at a list build (`CpuSph::build_lists`).
+        if self.region.partitioned(self.time) {
+            if self.region.needs_classification() || self.uncovered || !self.partitioned {
+                self.classify().map_err(dev)?;
+            }
+        } else {
+            self.region.forget();
+            if self.partitioned {
+                self.unpartition().map_err(dev)?;
+            }
+        }
+        let live = groups(self.live);
         let limit = max_dt.map_or(f32::MAX, |m| m as f32);
         self.queue.write_buffer(&self.b.info, 8, bytemuck::bytes_of(&limit));
         let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("step") });
@@ -863,22 +919,25 @@ impl GpuSph {
             // The water's partial density and mass from the porosity it starts in
             // (CPU twin: `CpuSph::init_water`).
             self.record_pores(&mut enc, w, 0);
-            dispatch(&mut enc, &w.k.init_water.pipeline, &w.init_water, groups(self.n));
+            dispatch(&mut enc, &w.k.init_water.pipeline, &w.init_water, live);
         }
         if let Some(w) = self.wet.as_mut() {
             w.ready = true;
         }
         self.record_evaluate(&mut enc, 0, !rk2);
-        dispatch(&mut enc, &self.k.info.maxima, &self.g.info, groups(self.n));
+        dispatch(&mut enc, &self.k.info.maxima, &self.g.info, live);
         dispatch(&mut enc, &self.k.info.choose_dt, &self.g.info, 1);
         if let (true, Some(stage)) = (rk2, &self.k.advance.stage) {
-            dispatch(&mut enc, stage, &self.g.advance, groups(self.n));
+            dispatch(&mut enc, stage, &self.g.advance, live);
             self.record_evaluate(&mut enc, 1, true);
         }
-        dispatch(&mut enc, &self.k.advance.finish, &self.g.advance, groups(self.n));
+        dispatch(&mut enc, &self.k.advance.finish, &self.g.advance, live);
         if let Some(w) = &self.wet {
             // A water particle's stress is its pore pressure (from the last evaluation).
-            dispatch(&mut enc, &w.k.water_stress.pipeline, &w.water_stress, groups(self.n));
+            dispatch(&mut enc, &w.k.water_stress.pipeline, &w.water_stress, live);
+        }
+        if let (true, Some(a)) = (self.partitioned, &self.act) {
+            dispatch(&mut enc, &a.k.cover, &a.group, live);
         }
         enc.copy_buffer_to_buffer(&self.b.info, 0, &self.b.info_read, 0, Some(size_of::<Info>() as u64));
         let nb = self.n_bodies;
@@ -906,7 +965,8 @@ impl GpuSph {
             _ => f64::from(info.dt),
         };
         let time = self.time + dt;
-        self.active = info.active as usize;
+        self.active = info.active as usize + self.asleep;
+        self.uncovered = info.uncovered != 0;
         if info.err_code != 0 {
             let (step, particle) = (self.steps, info.err_id);
             return Err(match info.err_code {
@@ -926,20 +986,104 @@ impl GpuSph {
             max_speed: f64::from(f32::from_bits(info.vmax_end)),
             max_accel: f64::from(f32::from_bits(info.amax_end)),
             active: self.active,
-            awake: self.active,
+            awake: if self.partitioned { self.awake } else { self.active },
             pairs: info.pairs as usize,
             rarefied: info.rarefied as usize,
         })
     }
 
-    fn sync_gpu(&mut self) -> Result<(), GpuError> {
+    /// The particle records, in device order.
+    fn read_particles(&self) -> Result<Vec<Particle>, GpuError> {
         let n = self.n;
-        let parts: Vec<Particle> =
+        let mut parts: Vec<Particle> =
             self.read_back(&self.b.parts, &self.b.parts_read, (n.max(1) * size_of::<Particle>()) as u64, |b| {
                 bytemuck::cast_slice::<u8, Particle>(b).to_vec()
             })?;
+        parts.truncate(n);
+        Ok(parts)
+    }
+
+    fn sync_gpu(&mut self) -> Result<(), GpuError> {
+        let parts = self.read_particles()?;
+        self.fill_mirror(&parts);
+        Ok(())
+    }
+
+    /// Classifies the particles with the CPU's own code (from their state on the device) and
+    /// puts them in its order: awake, extended (flagged frozen), asleep, outside. The device
+    /// then sorts and steps the first `awake + extended`. CPU twin: `CpuSph::classify`.
+    fn classify(&mut self) -> Result<(), GpuError> {
+        let parts = self.read_particles()?;
+        let v3 = |a: [f32; 3]| Vec3::new(a[0], a[1], a[2]);
+        let pos: Vec<Vec3<f32>> = parts.iter().map(|p| v3(p.pos)).collect();
+        let vel: Vec<Vec3<f32>> = parts.iter().map(|p| v3(p.vel)).collect();
+        let Classification { order, count } = self.region.classify(&self.grid, &pos, &vel, 2.0 * self.cfg.h());
+        let near = count[0] + count[1];
+        let next: Vec<Particle> = order
+            .iter()
+            .enumerate()
+            .map(|(k, &o)| {
+                let mut p = parts[o as usize];
+                p.flags = if k < count[0] { p.flags & !layout::FLAG_FROZEN } else { p.flags | layout::FLAG_FROZEN };
+                p
+            })
+            .collect();
+        let cells: Vec<u32> = self.region.awake_cells().iter().map(|&a| u32::from(a)).collect();
+        let act = self.act.as_ref().ok_or(GpuError::Internal("active region without its kernel"))?;
+        if !cells.is_empty() {
+            self.queue.write_buffer(&act.cells, 0, bytemuck::cast_slice(&cells));
+        }
+        self.live = near;
+        self.awake = count[0];
+        self.asleep = count[2];
+        self.active = near + count[2];
+        self.partitioned = true;
+        self.uncovered = false;
+        self.upload(&next, near);
+        Ok(())
+    }
+
+    /// Gives every particle back to the device's sort and step (the region was switched off
+    /// or the free-flow time not reached): frozen flags cleared, all of them sorted.
+    fn unpartition(&mut self) -> Result<(), GpuError> {
+        let mut parts = self.read_particles()?;
+        for p in &mut parts {
+            p.flags &= !layout::FLAG_FROZEN;
+        }
+        self.live = self.n;
+        self.asleep = 0;
+        self.partitioned = false;
+        self.uncovered = false;
+        self.upload(&parts, self.n);
+        Ok(())
+    }
+
+    /// Writes the particle records and the count the next sort takes, and refreshes the host
+    /// copy (the records' order changed).
+    fn upload(&mut self, parts: &[Particle], sorted: usize) {
+        if !parts.is_empty() {
+            self.queue.write_buffer(&self.b.parts, 0, bytemuck::cast_slice(parts));
+        }
+        self.queue.write_buffer(&self.b.info, 0, bytemuck::bytes_of(&(sorted as u32)));
+        self.fill_mirror(parts);
+    }
+
+    /// Refreshes the host copy from records in device order. While an active region is kept,
+    /// the device sorts awake and extended particles together; the host copy puts the awake
+    /// ones first (then extended, asleep, outside), as the CPU backend orders them.
+    fn fill_mirror(&mut self, device_order: &[Particle]) {
         let m = &mut self.mirror;
-        let parts = &parts[..n];
+        m.order.clear();
+        if self.partitioned {
+            let inside = (self.active - self.asleep).min(device_order.len());
+            let frozen = |p: &Particle| p.flags & layout::FLAG_FROZEN != 0;
+            m.order.extend((0..inside).filter(|&i| !frozen(&device_order[i])).map(|i| i as u32));
+            m.order.extend((0..inside).filter(|&i| frozen(&device_order[i])).map(|i| i as u32));
+            m.order.extend(inside as u32..device_order.len() as u32);
+        } else {
+            m.order.extend(0..device_order.len() as u32);
+        }
+        let parts: Vec<Particle> = m.order.iter().map(|&i| device_order[i as usize]).collect();
         let v3 = |a: [f32; 3]| Vec3::new(a[0], a[1], a[2]);
         m.pos = parts.iter().map(|p| v3(p.pos)).collect();
         m.vel = parts.iter().map(|p| v3(p.vel)).collect();
@@ -953,7 +1097,6 @@ impl GpuSph {
         m.mass = parts.iter().map(|p| p.mass).collect();
         m.id = parts.iter().map(|p| p.id).collect();
         m.flags = parts.iter().map(|p| p.flags).collect();
-        Ok(())
     }
 
     /// Reads back what only diagnostics and tests look at: the last stage's rates
@@ -965,8 +1108,9 @@ impl GpuSph {
             self.read_back(&self.b.rates, &self.b.rates_read, (n.max(1) * size_of::<Rate>()) as u64, |b| {
                 bytemuck::cast_slice::<u8, Rate>(b).to_vec()
             })?;
-        self.mirror.acc = rates[..n].iter().map(|r| Vec3::new(r.acc[0], r.acc[1], r.acc[2])).collect();
-        self.mirror.fs = rates[..n].iter().map(|r| r.fs).collect();
+        let order = &self.mirror.order;
+        self.mirror.acc = order.iter().map(|&i| rates[i as usize].acc).map(|a| Vec3::new(a[0], a[1], a[2])).collect();
+        self.mirror.fs = order.iter().map(|&i| rates[i as usize].fs).collect();
         let nm = self.nm;
         if nm > 0 {
             let markers: Vec<Marker> =
@@ -1007,6 +1151,34 @@ impl SphSolver<f32> for GpuSph {
     }
     fn active(&self) -> usize {
         self.active
+    }
+    fn awake(&self) -> usize {
+        if self.partitioned { self.awake } else { self.active }
+    }
+    fn set_active_domain(&mut self, domain: Option<ActiveDomain>) -> Result<(), SolverError> {
+        self.region.set(domain, self.n_bodies, self.wet.is_some()).map_err(SolverError::Setup)?;
+        if self.region.domain().is_some() && self.act.is_none() {
+            let dev = |e: GpuError| SolverError::Setup(format!("wgpu: {e}"));
+            let k = Cover::new(&self.device, &self.effects).map_err(dev)?;
+            let cells = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("active.cells"),
+                size: (self.n_cells.max(1) * 4).next_multiple_of(16) as u64,
+                usage: USAGE,
+                mapped_at_creation: false,
+            });
+            let group = bind(
+                &self.device,
+                "cover",
+                &k.layout,
+                &[(0, &self.b.params), (1, &self.b.parts), (2, &cells), (3, &self.b.info)],
+            );
+            self.act = Some(ActiveParts { k, cells, group });
+            self.variants.push("cover".into());
+        }
+        Ok(())
+    }
+    fn classifications(&self) -> u64 {
+        self.region.classifications()
     }
     fn step(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
         self.step_gpu(max_dt)
@@ -1063,6 +1235,7 @@ impl SphSolver<f32> for GpuSph {
         self.markers_dirty = true;
     }
     fn place_bodies(&mut self, bodies: &[BodyMarkers<'_>], states: &[BodyState]) {
+        self.region.place(states);
         if bodies.len() != self.n_bodies || states.len() != bodies.len() {
             // Not the bodies the markers were built for: place them from the host.
             regolith_fsi::place_on_host(self, bodies, states);

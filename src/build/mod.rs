@@ -63,17 +63,6 @@ pub enum BuildError {
     /// The soil solver refused its inputs.
     #[error(transparent)]
     Solver(#[from] SolverError),
-    /// Active domains were asked for on a backend without them.
-    #[error(
-        "{}: key `sph.active.enabled`: active domains run on the CPU backend only (this run is on {backend}); set [simulation] backend = \"cpu\" or remove [sph.active]",
-        file.display()
-    )]
-    ActiveBackend {
-        /// The scene file.
-        file: std::path::PathBuf,
-        /// The backend of the run.
-        backend: String,
-    },
     /// Terrain scenes need a container.
     #[error("a scene needs a [container]")]
     NoContainer,
@@ -371,9 +360,6 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
         system.fluid.set_permeable(&permeable)?;
     }
     if let Some(a) = active {
-        if system.fluid.backend() != "cpu" {
-            return Err(BuildError::ActiveBackend { file: scene.path.clone(), backend: system.fluid.backend().into() });
-        }
         system.fluid.set_active_domain(Some(a))?;
     }
     let fsi = ids.iter().map(|id| system.fsi_body(*id)).collect();

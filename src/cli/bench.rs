@@ -62,24 +62,7 @@ pub(super) fn run(
         if let Some(s) = skin {
             scene.solver.neighbor_skin = s;
         }
-        scene.backend = match backend {
-            BackendArg::Auto => scene::Backend::Auto,
-            BackendArg::Cpu => scene::Backend::Cpu,
-            BackendArg::Wgpu => scene::Backend::Wgpu,
-        };
-        scene.precision_set = true;
-        let chosen =
-            crate::build::backend::resolve_backend(&mut scene).map_err(|m| InputError::flag("--backend", m))?;
-        eprintln!("{chosen}");
-        if let Some(skin) = skin.filter(|s| *s > 0.0 && scene.backend == scene::Backend::Wgpu) {
-            return Err(InputError::flag(
-                "--skin",
-                format!(
-                    "the wgpu backend rebuilds its neighbour lists every step: use 0 or --backend cpu (got {skin})"
-                ),
-            )
-            .into());
-        }
+        on_backend(&mut scene, backend, skin)?;
         let r = run_bench(name, &scene, m, warmup, steps).context("bench run failed")?;
         println!(
             "bench {} {:<15} {} {} skin {} h: {} particles, {} markers, {} steps ({} list builds, {} steps redone) in {:.2} s: {:.3e} particle-steps/s, {:.3e} listed pairs/s ({:.1} listed neighbours/particle, {} threads, adapter {}); dt {:.3e} s, {:.3e} simulated s per wall s{}",
@@ -111,12 +94,39 @@ pub(super) fn run(
     Ok(())
 }
 
+/// Puts a bench scene on `--backend` (the run's own check of the adapter, precision and
+/// lists); a skin above 0 on wgpu is a `--skin` error.
+fn on_backend(scene: &mut scene::Scene, backend: BackendArg, skin: Option<f64>) -> Result<(), Failure> {
+    scene.backend = match backend {
+        BackendArg::Auto => scene::Backend::Auto,
+        BackendArg::Cpu => scene::Backend::Cpu,
+        BackendArg::Wgpu => scene::Backend::Wgpu,
+    };
+    scene.precision_set = true;
+    let chosen = crate::build::backend::resolve_backend(scene).map_err(|m| InputError::flag("--backend", m))?;
+    if let Some(skin) = skin.filter(|s| *s > 0.0 && scene.backend == scene::Backend::Wgpu) {
+        return Err(InputError::flag(
+            "--skin",
+            format!("the wgpu backend rebuilds its neighbour lists every step: use 0 or --backend cpu (got {skin})"),
+        )
+        .into());
+    }
+    eprintln!("{chosen}");
+    Ok(())
+}
+
 /// `regolith bench --scene wheel-long`: timed exchanges of the wheel on the long bed, with and
 /// without the active region; `steps` and `warmup` count exchanges (1 ms each).
+/// What `--scene wheel-long` runs: the active region, the backend, the bed and patch length.
+pub(super) struct WheelLong {
+    pub active: ActiveArg,
+    pub backend: BackendArg,
+    pub length: f64,
+    pub patch: Option<f64>,
+}
+
 pub(super) fn wheel_long(
-    active: ActiveArg,
-    length: f64,
-    patch: Option<f64>,
+    WheelLong { active, backend, length, patch }: WheelLong,
     skin: &[f64],
     steps: u64,
     warmup: u64,
@@ -139,9 +149,11 @@ pub(super) fn wheel_long(
         if let Some(s) = skin {
             scene.solver.neighbor_skin = s;
         }
+        on_backend(&mut scene, backend, skin)?;
         let r = run_wheel_long(&scene, warmup, steps).context("bench run failed")?;
         println!(
-            "bench wheel-long active {}{} skin {} h: {} particles ({:.0} integrated per step), {} markers; {} exchanges, {} steps (dt {:.3e} s, {} list builds, {} steps redone) in {:.2} s ({} classifications): {:.3e} simulated s per wall s, {:.3e} particle-steps/s; wheel force x {:.2} N, z {:.2} N ({} threads)",
+            "bench wheel-long {} active {}{} skin {} h: {} particles ({:.0} integrated per step), {} markers; {} exchanges, {} steps (dt {:.3e} s, {} list builds, {} steps redone) in {:.2} s ({} classifications): {:.3e} simulated s per wall s, {:.3e} particle-steps/s; wheel force x {:.2} N, z {:.2} N ({} threads, adapter {})",
+            r.backend,
             if r.active { "on " } else { "off" },
             r.patch.map_or(String::new(), |l| format!(" patch {l} m")),
             r.neighbor_skin,
@@ -159,7 +171,8 @@ pub(super) fn wheel_long(
             r.timed.particle_steps_per_s,
             r.force_xz[0],
             r.force_xz[1],
-            r.threads
+            r.threads,
+            r.adapter
         );
         results.push(r);
     }

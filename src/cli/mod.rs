@@ -775,12 +775,24 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             Err(InputError::flag("--skin", "does not apply to --carve".to_string()).into())
         }
         Command::Bench { carve: true, json, .. } => bench::carve(json.as_deref()),
-        Command::Bench { scene: BenchSceneArg::WheelLong | BenchSceneArg::RoverPatch, backend, precision, .. }
-            if backend != BackendArg::Cpu || precision != Precision::F32 =>
+        Command::Bench { scene: BenchSceneArg::WheelLong | BenchSceneArg::RoverPatch, precision, .. }
+            if precision != Precision::F32 =>
+        {
+            Err(InputError::flag("--precision", "wheel-long and rover-patch run in f32 only".to_string()).into())
+        }
+        Command::Bench { scene: BenchSceneArg::RoverPatch, backend, .. } if backend != BackendArg::Cpu => {
+            Err(InputError::flag(
+                "--backend",
+                "rover-patch runs on the CPU backend only (the moving patch has no wgpu twin yet)".to_string(),
+            )
+            .into())
+        }
+        Command::Bench { scene: BenchSceneArg::WheelLong, backend, patch: Some(_), .. }
+            if backend != BackendArg::Cpu =>
         {
             Err(InputError::flag(
-                if backend != BackendArg::Cpu { "--backend" } else { "--precision" },
-                "wheel-long and rover-patch run on the CPU backend in f32 only".to_string(),
+                "--patch",
+                "the moving patch runs on the CPU backend only: use --backend cpu".to_string(),
             )
             .into())
         }
@@ -796,6 +808,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Bench {
             scene: BenchSceneArg::WheelLong,
             active,
+            backend,
             length,
             patch,
             steps,
@@ -805,9 +818,12 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             carve: false,
             ..
         } => bench::wheel_long(
-            active.unwrap_or(ActiveArg::Both),
-            length.unwrap_or(10.0),
-            patch,
+            bench::WheelLong {
+                active: active.unwrap_or(ActiveArg::Both),
+                backend,
+                length: length.unwrap_or(10.0),
+                patch,
+            },
             &skin,
             steps.unwrap_or(40),
             warmup.unwrap_or(5),

@@ -101,7 +101,8 @@ impl<T: Real> CpuSph<T> {
             .iter()
             .map(|c| c.heap_bytes())
             .sum::<usize>()
-            + sum!(s.v3, s.t, s.sym, s.st, s.u16, s.u32, s.b, self.awake_cells);
+            + sum!(s.v3, s.t, s.sym, s.st, s.u16, s.u32, s.b)
+            + self.region.heap_bytes();
         MemoryUse { particles, markers, lists, list_entries, sorting }
     }
 }

@@ -19,16 +19,18 @@ mod lanes;
 mod memory;
 mod neighbors;
 mod rates;
+mod region;
 mod wet;
 
 pub use grid::GridSpec;
 pub use memory::MemoryUse;
+pub use region::{ActiveRegion, Classification};
 pub use wet::{DELTA_SPH, WetSetup};
 
 use rayon::prelude::*;
 
 use crate::Real;
-use crate::active::{ActiveDomain, ActiveSettings, Role, RoleCounts, WorldBox};
+use crate::active::{ActiveDomain, RoleCounts};
 use crate::config::{
     DETACHED_THRESHOLD, FreeSurfaceStress, Integrator, KernelKind, RAREFIED_DENSITY, SolverConfig, TimeStep,
 };
@@ -148,17 +150,10 @@ pub struct CpuSph<T: Real> {
     marker_impulse: [f64; 3],
     owner_impulse: Vec<[f64; 3]>,
     // Active region (see `crate::active`). Soil order: awake | extended | asleep | escaped.
-    domain: Option<ActiveDomain>,
-    /// Where each body's box is now (placed with the markers).
-    boxes_now: Vec<WorldBox>,
-    /// Where they were at the last classification; `None` until one is made.
-    boxes_classified: Option<Vec<WorldBox>>,
-    /// Cells awake particles may be in until the next classification (see `active_roles`).
-    awake_cells: Vec<bool>,
+    region: ActiveRegion,
     awake: usize,
     near: usize,
     ext_sort: CellSort,
-    classifications: u64,
     // Verlet lists (see `lists_still_hold`).
     /// Skin length (m); 0 rebuilds every step.
     skin: f64,
@@ -335,14 +330,10 @@ impl<T: Real> CpuSph<T> {
             c_max: ref_cs,
             marker_impulse: [0.0; 3],
             owner_impulse: vec![[0.0; 3]; markers.iter().map(|m| m.owner as usize + 1).max().unwrap_or(1)],
-            domain: None,
-            boxes_now: Vec::new(),
-            boxes_classified: None,
-            awake_cells: Vec::new(),
+            region: ActiveRegion::default(),
             awake: n,
             near: n,
             ext_sort: CellSort::default(),
-            classifications: 0,
             skin: cfg.neighbor_skin * h,
             lists_valid: false,
             lists_partitioned: false,
@@ -413,7 +404,7 @@ impl<T: Real> CpuSph<T> {
     }
     /// Classifications of the active region made so far.
     pub fn classifications(&self) -> u64 {
-        self.classifications
+        self.region.classifications()
     }
     /// Neighbour-list builds so far (one per step without a Verlet skin).
     pub fn list_builds(&self) -> u64 {
@@ -427,54 +418,19 @@ impl<T: Real> CpuSph<T> {
     /// Keeps an active region from now on (`None`: the whole domain is awake). `domain.boxes`
     /// has one box per FSI body, in marker-owner order (owner `k + 1` is box `k`).
     pub fn set_active_domain(&mut self, domain: Option<ActiveDomain>) -> Result<(), SolverError> {
-        if domain.is_some() && self.wet.is_some() {
-            return Err(SolverError::Setup(
-                "active domains are not available with water yet: keep the whole domain active".into(),
-            ));
-        }
-        if let Some(d) = &domain {
-            if let Err((key, msg)) = d.settings.validate() {
-                return Err(SolverError::Setup(format!("active domain {key} {msg}")));
-            }
-            let bodies = self.owner_impulse.len() - 1;
-            if d.boxes.len() != bodies {
-                return Err(SolverError::Setup(format!(
-                    "active domain has {} boxes for {bodies} bodies",
-                    d.boxes.len()
-                )));
-            }
-        }
-        self.domain = domain;
-        self.boxes_now.clear();
-        self.boxes_classified = None;
+        self.region.set(domain, self.owner_impulse.len() - 1, self.wet.is_some()).map_err(SolverError::Setup)?;
         self.lists_valid = false;
         Ok(())
     }
     /// Places the active-region boxes from the bodies' states (owner order).
     pub fn place_boxes(&mut self, states: &[BodyState]) {
-        if let Some(d) = &self.domain {
-            self.boxes_now.clear();
-            self.boxes_now.extend(d.boxes.iter().zip(states).map(|(b, s)| b.place(s)));
-        }
+        self.region.place(states);
     }
     /// The roles the particles would get if classified now, with the boxes placed at
     /// `states` (what `regolith check` reports before a run; ignores the free-flow time).
     pub fn expected_roles(&self, states: &[BodyState]) -> Option<RoleCounts> {
-        let d = self.domain.as_ref()?;
-        let boxes: Vec<WorldBox> = d.boxes.iter().zip(states).map(|(b, s)| b.place(s)).collect();
         let n = self.active;
-        let mut cells = Vec::new();
-        let roles = active_roles(
-            &self.grid,
-            &self.pos[..n],
-            &self.vel[..n],
-            &boxes,
-            &d.settings,
-            2.0 * self.cfg.h(),
-            &mut cells,
-        );
-        let count = |r: Role| roles.iter().filter(|&&x| x == r).count();
-        Some(RoleCounts { awake: count(Role::Awake), extended: count(Role::Extended), asleep: count(Role::Asleep) })
+        self.region.expected(&self.grid, &self.pos[..n], &self.vel[..n], 2.0 * self.cfg.h(), states)
     }
     /// Positions (m), cell-sorted.
     pub fn positions(&self) -> &[Vec3<T>] {
@@ -710,7 +666,7 @@ impl<T: Real> CpuSph<T> {
         }
         self.walls_sorted = false;
         self.markers_dirty = true;
-        self.boxes_classified = None;
+        self.region.forget();
         self.lists_valid = false;
         self.x_ref.clear();
         Ok(lifted)
@@ -751,60 +707,29 @@ impl<T: Real> CpuSph<T> {
         self.soil_sort.order = order;
     }
 
-    /// True while the active region is kept: a domain with boxes, placed, after the
-    /// free-flow time.
+    /// True while the active region is kept (see [`ActiveRegion::partitioned`]).
     fn partitioned(&self) -> bool {
-        self.domain.as_ref().is_some_and(|d| {
-            !d.boxes.is_empty() && self.boxes_now.len() == d.boxes.len() && self.time >= d.settings.free_flow_time
-        })
-    }
-
-    /// True when the last classification no longer holds: none made yet, or some box has
-    /// moved farther than the travel allowance since.
-    fn needs_classification(&self) -> bool {
-        let Some(d) = &self.domain else { return false };
-        match &self.boxes_classified {
-            None => true,
-            Some(old) => {
-                old.len() != self.boxes_now.len()
-                    || self.boxes_now.iter().zip(old).any(|(b, o)| b.drift_from(o) > d.settings.travel)
-            }
-        }
+        self.region.partitioned(self.time)
     }
 
     /// Every awake particle (just sorted) is inside the grid and in a cell awake particles may
     /// be in since the last classification (one it held, or a neighbour of one).
     fn awake_still_covered(&self) -> bool {
         self.soil_sort.inside() == self.awake
-            && self.pos[..self.awake]
-                .par_iter()
-                .all(|p| self.idx.coords(*p).is_some_and(|c| self.awake_cells.get(self.idx.linear(c)) == Some(&true)))
+            && self.pos[..self.awake].par_iter().all(|p| {
+                self.idx.coords(*p).is_some_and(|c| self.region.awake_cells().get(self.idx.linear(c)) == Some(&true))
+            })
     }
 
     /// Gives every particle inside the domain its role (see [`crate::active`]) and reorders
     /// the arrays into awake | extended (cell-sorted) | asleep | escaped.
     fn classify(&mut self) {
-        let Some(d) = &self.domain else { return };
+        if self.region.domain().is_none() {
+            return;
+        }
         let n = self.active;
-        let roles = active_roles(
-            &self.grid,
-            &self.pos[..n],
-            &self.vel[..n],
-            &self.boxes_now,
-            &d.settings,
-            2.0 * self.cfg.h(),
-            &mut self.awake_cells,
-        );
-        let mut count = [0usize; 4];
-        for &r in &roles {
-            count[r as usize] += 1;
-        }
-        let mut next = [0, count[0], count[0] + count[1], count[0] + count[1] + count[2]];
-        let mut order = vec![0u32; n];
-        for (i, &r) in roles.iter().enumerate() {
-            order[next[r as usize]] = i as u32;
-            next[r as usize] += 1;
-        }
+        let Classification { order, count } =
+            self.region.classify(&self.grid, &self.pos[..n], &self.vel[..n], 2.0 * self.cfg.h());
         self.permute_soil(0, &order);
         self.awake = count[0];
         self.near = count[0] + count[1];
@@ -822,8 +747,6 @@ impl<T: Real> CpuSph<T> {
         self.s_rho[r.clone()].copy_from_slice(&self.rho[r.clone()]);
         self.s_sigma[r.clone()].copy_from_slice(&self.sigma[r.clone()]);
         self.s_state[r.clone()].copy_from_slice(&self.state[r]);
-        self.boxes_classified = Some(self.boxes_now.clone());
-        self.classifications += 1;
     }
 
     /// Sorts and builds the neighbour lists, or keeps the last ones when they still hold
@@ -866,14 +789,14 @@ impl<T: Real> CpuSph<T> {
             return false;
         }
         let partitioned = self.partitioned();
-        if partitioned != self.lists_partitioned || (partitioned && self.needs_classification()) {
+        if partitioned != self.lists_partitioned || (partitioned && self.region.needs_classification()) {
             return false;
         }
         let n = self.awake;
         if self.x_ref.len() != n {
             return false;
         }
-        let (idx, cells) = (&self.idx, &self.awake_cells);
+        let (idx, cells) = (&self.idx, self.region.awake_cells());
         let moved = self.pos[..n]
             .par_iter()
             .zip(self.x_ref.par_iter())
@@ -902,7 +825,7 @@ impl<T: Real> CpuSph<T> {
 
     fn build_lists(&mut self) {
         if self.partitioned() {
-            if self.needs_classification() {
+            if self.region.needs_classification() {
                 self.classify();
             }
             self.sort_awake();
@@ -912,7 +835,7 @@ impl<T: Real> CpuSph<T> {
             }
         } else {
             // The whole domain is awake.
-            self.boxes_classified = None;
+            self.region.forget();
             self.awake = self.active;
             self.sort_awake();
             self.active = self.soil_sort.inside();
@@ -1551,77 +1474,6 @@ fn at_least<T: Real>(x: T, floor: T) -> T {
 /// a thousand of the skin is kept back for round-off in the distance tests.
 fn within_skin(soil: f64, markers: f64, skin: f64) -> bool {
     soil + soil.max(markers) <= 0.999 * skin
-}
-
-/// The role of each particle (see [`crate::active`]): awake inside a box grown by the travel
-/// allowance or faster than the sleep speed, extended within one cell plus the search reach of
-/// a cell holding an awake particle, asleep otherwise, outside off the grid. `awake_cells`
-/// receives the cells awake particles may move in until the next classification (those they
-/// hold and one more on every side).
-fn active_roles<T: Real>(
-    grid: &GridSpec,
-    pos: &[Vec3<T>],
-    vel: &[Vec3<T>],
-    boxes: &[WorldBox],
-    settings: &ActiveSettings,
-    radius: f64,
-    awake_cells: &mut Vec<bool>,
-) -> Vec<Role> {
-    let idx = CellIndexer::<T>::new(grid);
-    let v2 = settings.sleep_speed * settings.sleep_speed;
-    let outside = u32::MAX;
-    let (cell, mut roles): (Vec<u32>, Vec<Role>) = pos
-        .par_iter()
-        .zip(vel.par_iter())
-        .map(|(p, v)| match idx.coords(*p) {
-            None => (outside, Role::Outside),
-            Some(c) => {
-                let x = p.as_f64();
-                let awake = v.as_f64().iter().map(|a| a * a).sum::<f64>() > v2
-                    || boxes.iter().any(|b| b.contains(x, settings.travel));
-                (idx.linear(c) as u32, if awake { Role::Awake } else { Role::Asleep })
-            }
-        })
-        .unzip();
-    let dims = grid.dims;
-    let mut held = vec![false; grid.cells()];
-    for (&c, &r) in cell.iter().zip(&roles) {
-        if r == Role::Awake {
-            held[c as usize] = true;
-        }
-    }
-    // Awake particles may drift one cell past the cells they held before the classification
-    // must be redone; the extended band reaches the search reach past that, so every awake
-    // particle's neighbours stay awake or extended meanwhile. The slack keeps the boundary
-    // particles' jitter across cell faces from forcing a classification every few steps.
-    const SLACK: usize = 1;
-    let reach = neighbors::reach(radius, grid.cell);
-    *awake_cells = dilate(&held, dims, SLACK);
-    let near = dilate(&held, dims, SLACK + reach);
-    roles.par_iter_mut().zip(cell.par_iter()).for_each(|(r, &c)| {
-        if *r == Role::Asleep && near[c as usize] {
-            *r = Role::Extended;
-        }
-    });
-    roles
-}
-
-/// The cells within `r` cells (along every axis: a cube) of a marked cell.
-fn dilate(mask: &[bool], dims: [usize; 3], r: usize) -> Vec<bool> {
-    let mut cur = mask.to_vec();
-    let stride = [dims[1] * dims[2], dims[2], 1];
-    for axis in 0..3 {
-        let mut next = cur.clone();
-        for (c, _) in cur.iter().enumerate().filter(|(_, m)| **m) {
-            let i = c / stride[axis] % dims[axis];
-            let base = c - i * stride[axis];
-            for j in i.saturating_sub(r)..=(i + r).min(dims[axis] - 1) {
-                next[base + j * stride[axis]] = true;
-            }
-        }
-        cur = next;
-    }
-    cur
 }
 
 /// Stress update with the plastic correction: `σ + dt σ̇` corrected by the material, state from

@@ -68,6 +68,11 @@ fn advance(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if (i >= info.n_active) { return; }
     var p = parts[i];
+    if ((p.flags & FLAG_FROZEN) != 0u) {
+        // Extended (frozen) soil reads the same state at both stages.
+        if (STAGE) { stage[i] = p; }
+        return;
+    }
     let r = rates[i];
     let mat = materials[p.material];
     let free = (p.flags & FLAG_FREE) != 0u;

@@ -53,12 +53,15 @@ struct Info {
     n_active: u32, dt: f32, max_dt: f32, rarefied: atomic<u32>,
     cmax: atomic<u32>, vmax: atomic<u32>, amax: atomic<u32>, pairs: atomic<u32>,
     err_id: atomic<u32>, err_code: atomic<u32>, vmax_end: atomic<u32>, amax_end: atomic<u32>,
-    drag: atomic<u32>,
+    drag: atomic<u32>, uncovered: atomic<u32>,
 }
 
 // Flag bits of `Particle.flags`.
 const FLAG_FREE: u32 = 1u;
 const FLAG_DETACHED: u32 = 2u;
+// Extended particle of an active region: a neighbour only, its state frozen (see
+// `regolith_fsi::active`).
+const FLAG_FROZEN: u32 = 4u;
 
 const F32_EPS: f32 = 1.1920929e-7;
 const F32_MIN_POS: f32 = 1.1754944e-38;

@@ -14,7 +14,7 @@ impl Forces {
         let layout = layout(
             device,
             "marker_forces",
-            &[(0, Uniform), (1, Read), (2, Read), (3, Read), (4, Read), (5, Read), (6, ReadWrite)],
+            &[(0, Uniform), (1, Read), (2, Read), (3, Read), (4, Read), (5, Read), (6, ReadWrite), (7, Read)],
         );
         let src = source(e, &Variant::default(), include_str!("forces.wgsl"), false);
         let marker_forces = pipelines(device, "marker_forces", &src, &layout, &["marker_forces"])?

@@ -8,6 +8,7 @@
 @group(0) @binding(4) var<storage, read> packed: array<Packed>;
 @group(0) @binding(5) var<storage, read> start: array<u32>;
 @group(0) @binding(6) var<storage, read_write> m_force: array<f32>;
+@group(0) @binding(7) var<storage, read> parts: array<Particle>;
 
 @compute @workgroup_size(64)
 fn marker_forces(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -24,6 +25,8 @@ fn marker_forces(@builtin(global_invocation_id) gid: vec3<u32>) {
                 let a = start[cell_linear(ix, iy, rc.z0)];
                 let b = start[cell_linear(ix, iy, rc.z1) + 1u];
                 for (var j = a; j < b; j++) {
+                    // Extended (frozen) soil is a neighbour of the soil, not a load on markers.
+                    if ((parts[j].flags & FLAG_FROZEN) != 0u) { continue; }
                     let pa = packed[j];
                     let r = packed_x(pa) - xw;
                     let r2 = dot(r, r);

@@ -2,6 +2,7 @@
 //! points) and bind-group layout. Kernels are compiled once per solver from the scene's
 //! [`Effects`](crate::Effects); the buffers they run on live in [`crate::GpuSph`].
 
+pub(crate) mod active;
 pub(crate) mod advance;
 pub(crate) mod bodies;
 pub(crate) mod extrapolate;

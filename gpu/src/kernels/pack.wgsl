@@ -22,5 +22,6 @@ fn pack(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = sym_scale(sigma, 1.0 / (r * r));
     let cs = sqrt((m.x + (4.0 / 3.0) * m.y) / mat.density);
     packed[i] = Packed(p.px, p.py, p.pz, p.vx, p.vy, p.vz, s.xx, s.yy, s.zz, s.xy, s.xz, s.yz, p.mass / r, p.mass, r, cs);
-    atomicMax(&info.cmax, max_bits(cs));
+    // The time step follows the integrated (awake) particles only.
+    if ((p.flags & FLAG_FROZEN) == 0u) { atomicMax(&info.cmax, max_bits(cs)); }
 }

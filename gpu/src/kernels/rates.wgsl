@@ -18,7 +18,7 @@
 @compute @workgroup_size(64)
 fn soil_rates(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if (i >= info.n_active) { return; }
+    if (i >= info.n_active || (parts[i].flags & FLAG_FROZEN) != 0u) { return; }
     let pa = packed[i];
     let xa = packed_x(pa);
     var s = Acc(0.0, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), sym_zero(), vec3<f32>(0.0), vec3<f32>(0.0));

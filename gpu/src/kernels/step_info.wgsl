@@ -21,6 +21,7 @@ fn reset() {
     atomicStore(&info.amax_end, 0u);
     atomicStore(&info.rarefied, 0u);
     atomicStore(&info.drag, 0u);
+    atomicStore(&info.uncovered, 0u);
 }
 
 @compute @workgroup_size(64)
@@ -28,6 +29,7 @@ fn maxima(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if (i >= info.n_active) { return; }
     let p = parts[i];
+    if ((p.flags & FLAG_FROZEN) != 0u) { return; }
     let r = rates[i];
     atomicMax(&info.vmax, max_bits(length(vec3<f32>(p.vx, p.vy, p.vz))));
     atomicMax(&info.amax, max_bits(length(vec3<f32>(r.ax, r.ay, r.az))));
