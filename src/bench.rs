@@ -396,7 +396,14 @@ pub fn rover_patch_scene(file: &Path, length: f64, patch_length: f64, patch: boo
     }
     let sets: Vec<(String, toml::Value)> =
         sets.into_iter().map(|(k, v)| (k, crate::scene::overrides::parse_value(&v))).collect();
-    crate::scene::load_scene(file, &sets)
+    // The example drives on a patch of its own: the whole-bed run leaves it out.
+    let source = crate::input::read_text(file)?;
+    let mut table: toml::Table = crate::input::parse_toml(file, &source)?;
+    if let Some(t) = table.get_mut("terrain").and_then(toml::Value::as_table_mut) {
+        t.remove("patch");
+    }
+    let text = toml::to_string(&table).map_err(|e| InputError::flag("--scene", format!("{}: {e}", file.display())))?;
+    load_scene_source(file, &text, &sets)
 }
 
 /// One rover-patch bench run.

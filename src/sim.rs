@@ -187,11 +187,13 @@ impl<T: Real> Simulation<T> {
     /// front (see [`crate::build::Patch`]).
     fn follow_patch(&mut self) -> Result<(), SolverError> {
         let Some(patch) = &mut self.patch else { return Ok(()) };
-        let markers = self.system.fluid.marker_positions();
+        // The FSI markers' span along x, from the bodies' states (a device backend places its
+        // markers on the device, so its host copy of them is not current).
         let (mut back, mut front) = (f64::INFINITY, f64::NEG_INFINITY);
         for b in &self.system.interface.bodies {
-            for p in &markers[b.markers.clone()] {
-                let x = p.x.as_f64();
+            let s = self.system.rigid.state(b.body);
+            for l in &b.local {
+                let x = s.to_world(*l)[0];
                 back = back.min(x);
                 front = front.max(x);
             }

@@ -489,6 +489,48 @@ fn a_scene_keeps_the_same_active_region_on_wgpu() {
     assert_eq!(f.active(), f.len(), "no soil escapes a resting bed");
 }
 
+/// A neighbour grid of more than 65 535 × 64 cells (the most one dispatch dimension holds):
+/// the device's per-cell passes run in rows of workgroups, and the soil, placed in the cells
+/// past the first row, comes out in the CPU's cell order with the CPU's rates.
+#[test]
+fn grids_wider_than_one_dispatch_row_sort_as_on_the_cpu() {
+    let Pair { mut cpu, mut gpu } = {
+        let scene = common::scene(MIXED);
+        let (mats, terrain) = scene_terrain::<f32>(&scene).expect("terrain");
+        let mut cfg = scene.solver;
+        cfg.time_step = TimeStep::Fixed(5e-5);
+        cfg.neighbor_skin = 0.0;
+        // 280 m of empty grid before the soil along x: the soil's cells lie past the first row.
+        let (lo, hi) = terrain.domain;
+        let domain = ([lo[0] - 280.0, lo[1], lo[2]], hi);
+        let d = device().expect("a wgpu adapter (lavapipe in CI)");
+        let cpu = CpuSph::new(cfg, mats.clone(), &terrain.particles, &terrain.markers, domain).expect("cpu");
+        let gpu = GpuSph::new(&d.device, &d.queue, &d.name, cfg, mats, &terrain.particles, &terrain.markers, domain)
+            .expect("gpu");
+        Pair { cpu, gpu }
+    };
+    let cells = gpu.grid().cells();
+    let row = 65_535 * 64;
+    assert!(cells > row, "{cells} cells");
+    for step in 0..2 {
+        cpu.step(None).expect("cpu step");
+        gpu.step(None).expect("gpu step");
+        gpu.sync().expect("sync");
+        gpu.sync_diagnostics().expect("diagnostics");
+        assert_eq!(cpu.ids(), SphSolver::ids(&gpu), "step {step}: cell order");
+        let e = rel_err(&v3(&cpu.accelerations()), &v3(gpu.accelerations()));
+        assert!(e < 1e-5, "step {step}: accelerations differ by {e:e}");
+    }
+    let idx = |p: Vec3<f32>| {
+        let g = cpu.grid();
+        let c = [0, 1, 2].map(|k| ((p.as_f64()[k] - g.origin[k]) / g.cell) as usize);
+        (c[0] * g.dims[1] + c[1]) * g.dims[2] + c[2]
+    };
+    let first = cpu.positions().iter().map(|p| idx(*p)).min().expect("particles");
+    eprintln!("{cells} cells, the soil's from cell {first} on");
+    assert!(first > row, "the soil must sit past the first row of cells (from {first})");
+}
+
 #[test]
 fn body_placement_and_wrench_kernels_match_their_cpu_twins() {
     let Pair { mut cpu, mut gpu } = pair(MIXED, 7, false);

@@ -24,6 +24,19 @@ pub struct ParticleInit {
     pub material: u16,
 }
 
+impl ParticleInit {
+    /// Checks particles laid by a moving patch: a known material, a positive density and mass.
+    pub fn check_laid(fresh: &[Self], materials: usize) -> Result<(), SolverError> {
+        match fresh.iter().find(|p| p.material as usize >= materials || !(p.rho > 0.0 && p.mass > 0.0)) {
+            None => Ok(()),
+            Some(p) => Err(SolverError::Setup(format!(
+                "particle laid at {:?} has material {} (of {materials}), density {} and mass {}",
+                p.pos, p.material, p.rho, p.mass
+            ))),
+        }
+    }
+}
+
 /// One boundary (BCE) marker. Markers of fixed walls never move; markers of bodies are moved
 /// by the coupling layer every exchange.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -167,6 +167,12 @@ pub struct GpuSph {
     variants: Vec<String>,
     grid: GridSpec,
     n: usize,
+    /// Particles the device buffers hold room for.
+    capacity: usize,
+    /// Id of the next particle a moving patch lays.
+    next_id: u32,
+    /// Fixed-wall markers (the first ones).
+    n_walls: usize,
     nm: usize,
     n_cells: usize,
     k: Kernels,
@@ -272,6 +278,23 @@ fn rheology_error(code: u32) -> RheologyError {
     }
 }
 
+/// A particle record from its initial state.
+fn record(p: &ParticleInit, id: u32) -> Particle {
+    Particle {
+        pos: p.pos.map(|x| x as f32),
+        vel: p.vel.map(|x| x as f32),
+        rho: p.rho as f32,
+        sigma: p.sigma.map(|x| x as f32),
+        pc: p.pc as f32,
+        sv: p.specific_volume as f32,
+        mass: p.mass as f32,
+        material: u32::from(p.material),
+        id,
+        flags: 0,
+        pad: 0,
+    }
+}
+
 impl GpuSph {
     /// Builds the solver on the caller's device. `domain` bounds everything that can take part,
     /// as for the CPU backend; `adapter` names the device for reports.
@@ -286,6 +309,23 @@ impl GpuSph {
         markers: &[MarkerInit],
         domain: ([f64; 3], [f64; 3]),
     ) -> Result<Self, GpuError> {
+        Self::with_capacity(device, queue, adapter, cfg, materials, particles, markers, domain, particles.len())
+    }
+
+    /// As [`GpuSph::new`], with device buffers for `capacity` particles (at least the ones
+    /// given): a moving patch ([`SphSolver::relay`]) may lay more soil than it lifts.
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_capacity(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        adapter: &str,
+        cfg: SolverConfig,
+        materials: Vec<Material<f32>>,
+        particles: &[ParticleInit],
+        markers: &[MarkerInit],
+        domain: ([f64; 3], [f64; 3]),
+        capacity: usize,
+    ) -> Result<Self, GpuError> {
         if materials.is_empty() {
             return Err(GpuError::Setup("no materials".into()));
         }
@@ -299,6 +339,7 @@ impl GpuSph {
         let h = cfg.h();
         let grid = GridSpec::covering(domain.0, domain.1, h);
         let n = particles.len();
+        let cap = capacity.max(n);
         let nm = markers.len();
         let n_cells = grid.cells();
         let limits = device.limits();
@@ -315,17 +356,21 @@ impl GpuSph {
             Ok(())
         };
         let sz = |count: usize, each: usize| (count.max(1) * each) as u64;
-        check("the particle buffer", sz(n, size_of::<Particle>()))?;
-        check("the rate buffer", sz(n, size_of::<Rate>()))?;
+        check("the particle buffer", sz(cap, size_of::<Particle>()))?;
+        check("the rate buffer", sz(cap, size_of::<Rate>()))?;
         check("the cell table", sz(n_cells + 2, 4))?;
         check("the marker buffer", sz(nm, size_of::<Packed>()))?;
+        // Wide dispatches come in rows of ROW_GROUPS workgroups (`kernels::dispatch`); the
+        // flat thread index is a u32.
         let max_groups = u64::from(limits.max_compute_workgroups_per_dimension);
-        let need_groups = (n.max(nm).max(n_cells + 1) as u64).div_ceil(64);
-        if need_groups > max_groups {
+        let rows = u64::from(crate::kernels::ROW_GROUPS);
+        let need_groups = (cap.max(nm).max(n_cells + 1) as u64).div_ceil(64);
+        let allowed = (rows * max_groups).min(u64::from(u32::MAX) / 256);
+        if max_groups < rows || need_groups > allowed {
             return Err(GpuError::Limit {
                 what: "one thread per particle, marker or cell".into(),
                 needed: need_groups,
-                allowed: max_groups,
+                allowed,
                 limit: "max_compute_workgroups_per_dimension",
             });
         }
@@ -427,23 +472,7 @@ impl GpuSph {
             variants.extend(Wet::names().iter().map(|s| s.to_string()));
         }
 
-        let init_parts: Vec<Particle> = particles
-            .iter()
-            .enumerate()
-            .map(|(i, p)| Particle {
-                pos: p.pos.map(|x| x as f32),
-                vel: p.vel.map(|x| x as f32),
-                rho: p.rho as f32,
-                sigma: p.sigma.map(|x| x as f32),
-                pc: p.pc as f32,
-                sv: p.specific_volume as f32,
-                mass: p.mass as f32,
-                material: u32::from(p.material),
-                id: i as u32,
-                flags: 0,
-                pad: 0,
-            })
-            .collect();
+        let init_parts: Vec<Particle> = particles.iter().enumerate().map(|(i, p)| record(p, i as u32)).collect();
         let m_host: Vec<Marker> = markers
             .iter()
             .map(|m| Marker { pos: m.pos.map(|x| x as f32), owner: m.owner, ..Marker::zeroed() })
@@ -470,18 +499,18 @@ impl GpuSph {
                 wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             ),
             materials: mk("materials", sz(materials.len(), size_of::<layout::Material>()), USAGE),
-            parts: mk("particles", sz(n, size_of::<Particle>()), USAGE),
-            tmp: mk("particles.tmp", sz(n, size_of::<Particle>()), USAGE),
-            stage: mk("particles.stage", sz(n, size_of::<Particle>()), USAGE),
-            packed: mk("packed", sz(n, size_of::<Packed>()), USAGE),
-            moduli: mk("moduli", sz(n, 8), USAGE),
-            rates: mk("rates", sz(n, size_of::<Rate>()), USAGE),
+            parts: mk("particles", sz(cap, size_of::<Particle>()), USAGE),
+            tmp: mk("particles.tmp", sz(cap, size_of::<Particle>()), USAGE),
+            stage: mk("particles.stage", sz(cap, size_of::<Particle>()), USAGE),
+            packed: mk("packed", sz(cap, size_of::<Packed>()), USAGE),
+            moduli: mk("moduli", sz(cap, 8), USAGE),
+            rates: mk("rates", sz(cap, size_of::<Rate>()), USAGE),
             info: mk("info", size_of::<Info>() as u64, USAGE),
-            cell_of: mk("cell_of", sz(n, 4), USAGE),
+            cell_of: mk("cell_of", sz(cap, 4), USAGE),
             counts: mk("counts", sz(n_cells + 1, 4), USAGE),
             start: mk("start", sz(n_cells + 2, 4), USAGE),
             sums: mk("sums", sz((n_cells + 1).div_ceil(512), 4), USAGE),
-            order: mk("order", sz(n, 4), USAGE),
+            order: mk("order", sz(cap, 4), USAGE),
             markers: mk("markers", sz(nm, size_of::<Marker>()), USAGE),
             m_sorted: mk("markers.sorted", sz(nm, size_of::<Marker>()), USAGE),
             m_limit: mk("markers.count", 4, USAGE),
@@ -499,8 +528,8 @@ impl GpuSph {
             wrenches: mk("bodies.wrench", sz(n_bodies, 24), USAGE),
             wrench_read: mk("bodies.wrench.read", sz(n_bodies, 24), read),
             markers_read: mk("markers.read", sz(nm, size_of::<Marker>()), read),
-            parts_read: mk("particles.read", sz(n, size_of::<Particle>()), read),
-            rates_read: mk("rates.read", sz(n, size_of::<Rate>()), read),
+            parts_read: mk("particles.read", sz(cap, size_of::<Particle>()), read),
+            rates_read: mk("rates.read", sz(cap, size_of::<Rate>()), read),
             owner_mu: mk("owners.mu", sz(n_bodies + 1, 4), USAGE),
         };
         queue.write_buffer(&b.owner_mu, 0, bytemuck::cast_slice(&vec![f32::INFINITY; n_bodies + 1]));
@@ -669,7 +698,7 @@ impl GpuSph {
                 // porosity, pore pressure and velocity gradient; per sorted marker its solid
                 // share, pore pressure, drag velocity and permeability, and the water's record
                 // (the soil's is `Buffers::m_packed`).
-                let pore = mk("pore", sz(n, size_of::<Pore>()), USAGE);
+                let pore = mk("pore", sz(cap, size_of::<Pore>()), USAGE);
                 let m_pore = mk("markers.pore", sz(nm, size_of::<MarkerPore>()), USAGE);
                 let m_packed_w = mk("markers.packed.water", sz(nm, size_of::<Packed>()), USAGE);
                 let owner_perm = mk("owners.permeable", sz(n_owners, 4), USAGE);
@@ -729,6 +758,9 @@ impl GpuSph {
             variants,
             grid,
             n,
+            capacity: cap,
+            next_id: n as u32,
+            n_walls: first_body_marker,
             nm,
             n_cells,
             k,
@@ -1071,6 +1103,59 @@ impl GpuSph {
     /// Refreshes the host copy from records in device order. While an active region is kept,
     /// the device sorts awake and extended particles together; the host copy puts the awake
     /// ones first (then extended, asleep, outside), as the CPU backend orders them.
+    /// The moving patch (CPU twin: `CpuSph::relay`): lifts the soil at `x < cut`, lays `fresh`
+    /// with new ids after the soil kept, shifts the fixed walls by `shift`, and gives every
+    /// particle back to the next step's sort (and classification). Made on the host: a patch
+    /// advances every few centimetres of travel.
+    fn relay_gpu(&mut self, cut: f64, shift: f64, fresh: &[ParticleInit]) -> Result<usize, SolverError> {
+        let dev = |e: GpuError| SolverError::Setup(format!("wgpu: {e}"));
+        if self.wet.is_some() {
+            return Err(SolverError::Setup("a moving patch does not carry water yet".into()));
+        }
+        ParticleInit::check_laid(fresh, self.materials.len())?;
+        if self.next_id as usize + fresh.len() >= u32::MAX as usize {
+            return Err(SolverError::Setup("too many particles laid by the moving patch (ids exhausted)".into()));
+        }
+        let parts = self.read_particles().map_err(dev)?;
+        // Kept in their order, escaped ones included (the next sort puts those last, as the
+        // CPU keeps them), then the fresh soil: the sort that follows gives the CPU's order.
+        let cut = cut as f32;
+        let mut next: Vec<Particle> = parts.iter().filter(|p| p.pos[0] >= cut).copied().collect();
+        let lifted = parts.len() - next.len();
+        let n = next.len() + fresh.len();
+        if n > self.capacity {
+            return Err(SolverError::Setup(format!(
+                "the moving patch now holds {n} particles, more than the {} the wgpu buffers were made for; a shorter terrain.patch.length, or backend = \"cpu\", keeps it",
+                self.capacity
+            )));
+        }
+        next.extend(fresh.iter().zip(self.next_id..).map(|(p, id)| record(p, id)));
+        self.next_id += fresh.len() as u32;
+        self.n = n;
+        self.live = n;
+        self.active = n;
+        self.asleep = 0;
+        self.partitioned = false;
+        self.uncovered = false;
+        self.region.forget();
+        self.queue.write_buffer(
+            &self.b.params,
+            std::mem::offset_of!(Params, n) as u64,
+            bytemuck::bytes_of(&(n as u32)),
+        );
+        self.upload(&next, n);
+        let dx = shift as f32;
+        for (m, p) in self.m_host[..self.n_walls].iter_mut().zip(&mut self.m_pos) {
+            m.pos[0] += dx;
+            p.x = m.pos[0];
+        }
+        if self.n_walls > 0 {
+            self.queue.write_buffer(&self.b.markers, 0, bytemuck::cast_slice(&self.m_host[..self.n_walls]));
+        }
+        self.markers_dirty = true;
+        Ok(lifted)
+    }
+
     fn fill_mirror(&mut self, device_order: &[Particle]) {
         let m = &mut self.mirror;
         m.order.clear();
@@ -1179,6 +1264,9 @@ impl SphSolver<f32> for GpuSph {
     }
     fn classifications(&self) -> u64 {
         self.region.classifications()
+    }
+    fn relay(&mut self, cut: f64, shift: f64, fresh: &[ParticleInit]) -> Result<usize, SolverError> {
+        self.relay_gpu(cut, shift, fresh)
     }
     fn step(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
         self.step_gpu(max_dt)

@@ -78,9 +78,11 @@ pub fn real_gpu() -> Option<&'static GpuDevice> {
     device().ok().filter(|d| d.hardware)
 }
 
-/// Builds the soil solver: the CPU backend, or with `wgpu` the device one (f32 only).
+/// Builds the soil solver: the CPU backend, or with `wgpu` the device one (f32 only, with
+/// buffers for `room` times the particles given: a moving patch lays more than it lifts).
 pub fn make_solver<T: Real>(
     wgpu: bool,
+    room: f64,
     cfg: SolverConfig,
     materials: Vec<Material<T>>,
     particles: &[ParticleInit],
@@ -92,7 +94,7 @@ pub fn make_solver<T: Real>(
     }
     #[cfg(not(feature = "wgpu"))]
     {
-        let _ = (cfg, materials, particles, markers, domain);
+        let _ = (room, cfg, materials, particles, markers, domain);
         Err(SolverError::Setup(NO_WGPU.into()))
     }
     #[cfg(feature = "wgpu")]
@@ -101,7 +103,8 @@ pub fn make_solver<T: Real>(
         let mats: Box<dyn Any> = Box::new(materials);
         let mats = mats.downcast::<Vec<Material<f32>>>().map_err(|_| f32_only())?;
         let d = device().map_err(|e| SolverError::Setup(format!("wgpu: {e}")))?;
-        let s = GpuSph::new(&d.device, &d.queue, &d.name, cfg, *mats, particles, markers, domain)
+        let capacity = (particles.len() as f64 * room.max(1.0)).ceil() as usize;
+        let s = GpuSph::with_capacity(&d.device, &d.queue, &d.name, cfg, *mats, particles, markers, domain, capacity)
             .map_err(|e| SolverError::Setup(format!("wgpu: {e}")))?;
         let b: Box<dyn SphSolver<f32>> = Box::new(s);
         let any: Box<dyn Any> = Box::new(b);

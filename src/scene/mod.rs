@@ -176,7 +176,7 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     let patch = soil::resolve_patch(
         file.terrain.as_ref().and_then(|t| t.patch.as_ref()),
         &container,
-        (&solver, backend, wet, container_walls),
+        (&solver, wet, container_walls),
         &bodies,
         &e,
     )?;

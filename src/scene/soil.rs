@@ -282,7 +282,7 @@ pub(super) fn resolve_soil(
 pub(super) fn resolve_patch(
     patch: Option<&PatchFile>,
     container: &Option<Aabb>,
-    (solver, backend, wet, walls): (&SolverConfig, Backend, bool, bool),
+    (solver, wet, walls): (&SolverConfig, bool, bool),
     bodies: &[BodySpec],
     e: &dyn Fn(&str, String) -> InputError,
 ) -> Result<Option<PatchSpec>, InputError> {
@@ -312,9 +312,6 @@ pub(super) fn resolve_patch(
                 2.0 * trigger
             ),
         ));
-    }
-    if backend == Backend::Wgpu {
-        return Err(e("terrain.patch", "runs on the \"cpu\" backend only (simulation.backend = \"wgpu\")".into()));
     }
     if wet {
         return Err(e(

@@ -607,18 +607,7 @@ impl<T: Real> CpuSph<T> {
         if self.wet.is_some() {
             return Err(SolverError::Setup("a moving patch does not carry water yet".into()));
         }
-        if let Some(p) =
-            fresh.iter().find(|p| p.material as usize >= self.materials.len() || !(p.rho > 0.0 && p.mass > 0.0))
-        {
-            return Err(SolverError::Setup(format!(
-                "particle laid at {:?} has material {} (of {}), density {} and mass {}",
-                p.pos,
-                p.material,
-                self.materials.len(),
-                p.rho,
-                p.mass
-            )));
-        }
+        ParticleInit::check_laid(fresh, self.materials.len())?;
         let (active, cut) = (self.active, T::of(cut));
         let kept: Vec<usize> = (0..active).filter(|&i| self.pos[i].x >= cut).collect();
         // Escaped particles behind the cut go too (thrown over the back wall: they are gone

@@ -12,7 +12,7 @@
 
 @compute @workgroup_size(64)
 fn cover(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active) { return; }
     let p = parts[i];
     if ((p.flags & FLAG_FROZEN) != 0u) { return; }

@@ -65,7 +65,7 @@ fn fail(id: u32, code: u32) {
 
 @compute @workgroup_size(64)
 fn advance(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active) { return; }
     var p = parts[i];
     if ((p.flags & FLAG_FROZEN) != 0u) {

@@ -63,6 +63,11 @@ const FLAG_DETACHED: u32 = 2u;
 // `regolith_fsi::active`).
 const FLAG_FROZEN: u32 = 4u;
 
+// A dispatch wider than the 65535 workgroups one dimension allows comes in rows of
+// ROW_GROUPS workgroups (`kernels::dispatch`): the flat index of a thread of a 64-wide kernel.
+const ROW_GROUPS: u32 = 65535u;
+fn flat(g: vec3<u32>) -> u32 { return g.x + g.y * (ROW_GROUPS * 64u); }
+
 const F32_EPS: f32 = 1.1920929e-7;
 const F32_MIN_POS: f32 = 1.1754944e-38;
 const PI: f32 = 3.14159265358979;

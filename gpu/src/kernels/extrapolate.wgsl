@@ -16,7 +16,7 @@
 
 @compute @workgroup_size(64)
 fn extrapolate(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
+    let k = flat(gid);
     if (k >= m_start[prm.n_cells]) { return; }
     let mk = markers[k];
     let xw = vec3<f32>(mk.px, mk.py, mk.pz);

@@ -12,7 +12,7 @@
 
 @compute @workgroup_size(64)
 fn marker_forces(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
+    let k = flat(gid);
     if (k >= m_start[prm.n_cells]) { return; }
     let pw = m_packed[k];
     let xw = packed_x(pw);

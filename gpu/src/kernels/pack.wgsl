@@ -11,7 +11,7 @@
 
 @compute @workgroup_size(64)
 fn pack(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active) { return; }
     let p = parts[i];
     let mat = materials[p.material];

@@ -13,7 +13,7 @@
 
 @compute @workgroup_size(64)
 fn permute_particles(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
+    let k = flat(gid);
     if (k >= prm.n) { return; }
     // `start[n_cells + 1]` is the number of points sorted: the previous active count.
     if (k < start[prm.n_cells + 1u]) {
@@ -30,7 +30,7 @@ fn set_active() {
 
 @compute @workgroup_size(64)
 fn gather_markers(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
+    let k = flat(gid);
     if (k >= start[prm.n_cells]) { return; }
     dst_markers[k] = src_markers[order[k]];
 }

@@ -17,7 +17,7 @@
 
 @compute @workgroup_size(64)
 fn soil_rates(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active || (parts[i].flags & FLAG_FROZEN) != 0u) { return; }
     let pa = packed[i];
     let xa = packed_x(pa);

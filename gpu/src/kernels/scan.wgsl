@@ -44,7 +44,8 @@ fn scan_tile(t: u32) -> u32 {
 @compute @workgroup_size(256)
 fn scan_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
     let t = lid.x;
-    let base = wg.x * BLOCK;
+    let block = wg.x + wg.y * ROW_GROUPS;
+    let base = block * BLOCK;
     for (var k = 0u; k < 2u; k++) {
         let i = base + t + k * 256u;
         var v = 0u;
@@ -56,7 +57,7 @@ fn scan_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_i
         let i = base + t + k * 256u;
         if (i < LEN) { start[i] = tile[t + k * 256u]; }
     }
-    if (t == 0u) { sums[wg.x] = total; }
+    if (t == 0u) { sums[block] = total; }
 }
 
 @compute @workgroup_size(256)
@@ -83,6 +84,6 @@ fn scan_sums(@builtin(local_invocation_id) lid: vec3<u32>) {
 
 @compute @workgroup_size(256)
 fn add_sums(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = gid.x + gid.y * (ROW_GROUPS * 256u);
     if (i < LEN) { start[i] += sums[i / BLOCK]; }
 }

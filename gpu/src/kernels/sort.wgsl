@@ -18,7 +18,7 @@
 
 @compute @workgroup_size(64)
 fn bin(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= limit[0]) { return; }
     let p = vec3<f32>(points[i * STRIDE], points[i * STRIDE + 1u], points[i * STRIDE + 2u]);
     let c = cell_coords(p);
@@ -30,7 +30,7 @@ fn bin(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= limit[0]) { return; }
     let c = cell_of[i];
     let slot = start[c] + atomicAdd(&counts[c], 1u);
@@ -39,7 +39,7 @@ fn scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn order_bins(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let c = gid.x;
+    let c = flat(gid);
     if (c > prm.n_cells) { return; }
     let a = start[c];
     let b = start[c + 1u];

@@ -26,7 +26,7 @@ fn reset() {
 
 @compute @workgroup_size(64)
 fn maxima(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active) { return; }
     let p = parts[i];
     if ((p.flags & FLAG_FROZEN) != 0u) { return; }

@@ -105,7 +105,7 @@ fn density_diffusion(pa: Packed, pb: Packed, psi_a: f32, psi_b: f32) -> f32 {
 
 @compute @workgroup_size(64)
 fn phases(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active) { return; }
     let mat = materials[parts[i].material];
     if (mat.model == MODEL_WATER) {
@@ -121,7 +121,7 @@ fn phases(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn marker_solids(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
+    let k = flat(gid);
     if (k >= m_start[prm.n_cells]) { return; }
     let mk = markers[k];
     let xw = marker_x(mk);
@@ -162,7 +162,7 @@ fn marker_solids(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn porosity(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active) { return; }
     let pa = packed[i];
     let xa = packed_x(pa);
@@ -261,7 +261,7 @@ fn porosity(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn soil_pressures(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active) { return; }
     if (pore[i].water != 0u) { return; }
     let xa = packed_x(packed[i]);
@@ -313,7 +313,7 @@ fn wall_record(xw: vec3<f32>, mk: Marker, sw: f32, sv: vec3<f32>, ss: Sym, srr: 
 
 @compute @workgroup_size(64)
 fn wet_extrapolate(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
+    let k = flat(gid);
     if (k >= m_start[prm.n_cells]) { return; }
     let mk = markers[k];
     let xw = marker_x(mk);
@@ -381,7 +381,7 @@ fn wet_extrapolate(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn wet_rates(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active) { return; }
     let pa = packed[i];
     let xa = packed_x(pa);
@@ -494,7 +494,7 @@ fn wet_rates(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn wet_marker_forces(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
+    let k = flat(gid);
     if (k >= m_start[prm.n_cells]) { return; }
     let ws = m_packed[k];
     let ww = m_packed_w[k];
@@ -543,7 +543,7 @@ fn wet_marker_forces(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn init_water(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active) { return; }
     if (pore[i].water == 0u) { return; }
     // Each water particle starts with the volume of its lattice cell, m / rho = d0^3, and the
@@ -556,7 +556,7 @@ fn init_water(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn water_stress(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = flat(gid);
     if (i >= info.n_active) { return; }
     if (pore[i].water == 0u) { return; }
     let p = -pore[i].p;
