@@ -453,6 +453,17 @@ fn active_regions_match_their_cpu_twin() {
     );
     assert!(cpu.classifications() >= 3, "the moving box must be followed");
     assert!(forces.abs() > 0.0, "the slab must touch the soil");
+    // The region switched off: every particle is stepped again, from the state it kept.
+    cpu.set_active_domain(None).expect("cpu: off");
+    SphSolver::set_active_domain(&mut gpu, None).expect("gpu: off");
+    for step in 0..2 {
+        let rc = cpu.step(None).expect("cpu step");
+        let rg = gpu.step(None).expect("gpu step");
+        gpu.sync().expect("sync");
+        assert_eq!((rc.awake, rc.active), (rg.awake, rg.active), "off, step {step}: awake, active");
+        assert_eq!(rg.awake, SphSolver::len(&gpu), "off, step {step}: all awake");
+        assert_eq!(cpu.ids(), SphSolver::ids(&gpu), "off, step {step}: cell order");
+    }
 }
 
 /// A scene's `[sph.active]` on wgpu: the rig-level path (scene, coupling layer, boxes placed
