@@ -1185,7 +1185,8 @@ impl GpuSph {
     }
 
     /// Reads back what only diagnostics and tests look at: the last stage's rates
-    /// (accelerations, free-surface measure) and every marker's position and force. Not part
+    /// (accelerations, free-surface measure, in the host copy's order: call after `sync`) and
+    /// every marker's position and force. Not part
     /// of `sync`, which runs once per exchange: with walls the markers outnumber the particles.
     pub fn sync_diagnostics(&mut self) -> Result<(), GpuError> {
         let n = self.n;

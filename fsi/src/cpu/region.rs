@@ -151,7 +151,8 @@ impl ActiveRegion {
 
     /// Bytes held (capacity).
     pub fn heap_bytes(&self) -> usize {
-        self.awake_cells.capacity() + (self.boxes_now.capacity() + 1) * size_of::<WorldBox>()
+        let boxes = self.boxes_now.capacity() + self.classified.as_ref().map_or(0, Vec::capacity);
+        self.awake_cells.capacity() + boxes * size_of::<WorldBox>()
     }
 }
 
