@@ -215,7 +215,7 @@ mod tests {
         assert_eq!(size_of::<Packed>(), 16 * 4);
         assert_eq!(size_of::<Rate>(), 26 * 4);
         assert_eq!(size_of::<Marker>(), 13 * 4);
-        assert_eq!(size_of::<Info>(), 13 * 4);
+        assert_eq!(size_of::<Info>(), 14 * 4);
         assert_eq!(size_of::<Material>(), 20 * 4);
         assert_eq!(size_of::<Body>(), 24 * 4);
         assert_eq!(size_of::<Pore>(), 17 * 4);
