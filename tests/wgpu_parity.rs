@@ -326,6 +326,59 @@ fn kernels_match(text: &str, seed: u64, permeable_body: bool, steps: usize) {
     }
 }
 
+/// A resting sand bed (0.6 × 0.1 m, 6 cm deep, d0 = 1 cm) on both backends (fixed dt 2e-4 s,
+/// no skin) with a 5 × 5 cm slab of body markers whose box is grown by `grow` and kept as an
+/// active region (travel 2 mm, sleep speed 1 m/s); `kick` may set particles' velocities first
+/// (it gets the bed's top). Returns the solvers, the slab's body-frame markers, its first
+/// marker and the bed's top (m).
+fn slab_over_bed(
+    grow: f64,
+    kick: impl Fn(&mut regolith_fsi::ParticleInit, f64),
+) -> (CpuSph<f32>, GpuSph, Vec<[f64; 3]>, usize, f64) {
+    use regolith_fsi::active::{ActiveDomain, ActiveSettings, BodyBox};
+    let text = "[simulation]\nend_time = 0.01\nprecision = \"f32\"\n[sph]\nspacing = 0.01\n\
+        [[materials]]\nname = \"sand\"\nmodel = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 2e6\npoisson_ratio = 0.3\nfriction_angle = 30.0\n\
+        [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.6, 0.1, 0.2]\n[terrain]\nmaterial = \"sand\"\ndepth = 0.06\n";
+    let scene = common::scene(text);
+    let (mats, mut terrain) = scene_terrain::<f32>(&scene).expect("terrain");
+    let top = terrain.particles.iter().map(|p| p.pos[2]).fold(0.0, f64::max);
+    for p in &mut terrain.particles {
+        kick(p, top);
+    }
+    let mut markers = terrain.markers.clone();
+    let first = markers.len();
+    let local: Vec<[f64; 3]> =
+        (0..36).map(|k| [0.01 * (k / 6) as f64 - 0.025, 0.01 * (k % 6) as f64 - 0.025, 0.0]).collect();
+    markers.extend(local.iter().map(|_| MarkerInit { pos: [0.0; 3], owner: 1 }));
+    let mut cfg = scene.solver;
+    cfg.time_step = TimeStep::Fixed(2e-4);
+    cfg.neighbor_skin = 0.0;
+    let d = device().expect("a wgpu adapter (lavapipe in CI)");
+    let mut cpu = CpuSph::new(cfg, mats.clone(), &terrain.particles, &markers, terrain.domain).expect("cpu");
+    let mut gpu = GpuSph::new(&d.device, &d.queue, &d.name, cfg, mats, &terrain.particles, &markers, terrain.domain)
+        .expect("gpu");
+    let domain = ActiveDomain {
+        settings: ActiveSettings { travel: 0.002, sleep_speed: 1.0, free_flow_time: 0.0 },
+        boxes: vec![BodyBox::around(&local).grown(grow)],
+    };
+    cpu.set_active_domain(Some(domain.clone())).expect("cpu domain");
+    SphSolver::set_active_domain(&mut gpu, Some(domain)).expect("gpu domain");
+    (cpu, gpu, local, first, top)
+}
+
+/// A body state at `origin`, moving along x at `v` (m/s).
+fn slab_state(origin: [f64; 3], v: f64) -> BodyState {
+    BodyState {
+        origin,
+        com: origin,
+        rotation: [0.0, 0.0, 0.0, 1.0],
+        linvel: [v, 0.0, 0.0],
+        angvel: [0.0; 3],
+        linacc: [0.0; 3],
+        angacc: [0.0; 3],
+    }
+}
+
 /// Active regions on both backends: a slab of body markers skims a resting sand bed at
 /// 0.5 m/s, its box (3 cm margin) re-placed every step and re-classified every 2 mm of travel.
 /// The wgpu backend classifies with the CPU's own code from the device's state, then sorts and
@@ -336,34 +389,10 @@ fn kernels_match(text: &str, seed: u64, permeable_body: bool, steps: usize) {
 /// from one step to the next.
 #[test]
 fn active_regions_match_their_cpu_twin() {
-    use regolith_fsi::active::{ActiveDomain, ActiveSettings, BodyBox};
     use std::collections::HashMap;
-    let text = "[simulation]\nend_time = 0.01\nprecision = \"f32\"\n[sph]\nspacing = 0.01\n\
-        [[materials]]\nname = \"sand\"\nmodel = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 2e6\npoisson_ratio = 0.3\nfriction_angle = 30.0\n\
-        [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.6, 0.1, 0.2]\n[terrain]\nmaterial = \"sand\"\ndepth = 0.06\n";
-    let scene = common::scene(text);
-    let (mats, terrain) = scene_terrain::<f32>(&scene).expect("terrain");
-    let mut markers = terrain.markers.clone();
-    let first = markers.len();
-    // A 5 x 5 cm slab 1 cm above the top particles' centres (in the soil's reach, 2h = 2.4 cm).
-    let local: Vec<[f64; 3]> =
-        (0..36).map(|k| [0.01 * (k / 6) as f64 - 0.025, 0.01 * (k % 6) as f64 - 0.025, 0.0]).collect();
-    markers.extend(local.iter().map(|_| MarkerInit { pos: [0.0; 3], owner: 1 }));
-    let mut cfg = scene.solver;
+    // The slab 1 cm above the top particles' centres (in the soil's reach, 2h = 2.4 cm).
+    let (mut cpu, mut gpu, local, first, top) = slab_over_bed(0.03, |_, _| {});
     let dt = 2e-4;
-    cfg.time_step = TimeStep::Fixed(dt);
-    cfg.neighbor_skin = 0.0;
-    let d = device().expect("a wgpu adapter (lavapipe in CI)");
-    let mut cpu = CpuSph::new(cfg, mats.clone(), &terrain.particles, &markers, terrain.domain).expect("cpu");
-    let mut gpu = GpuSph::new(&d.device, &d.queue, &d.name, cfg, mats, &terrain.particles, &markers, terrain.domain)
-        .expect("gpu");
-    let domain = ActiveDomain {
-        settings: ActiveSettings { travel: 0.002, sleep_speed: 1.0, free_flow_time: 0.0 },
-        boxes: vec![BodyBox::around(&local).grown(0.03)],
-    };
-    cpu.set_active_domain(Some(domain.clone())).expect("cpu domain");
-    SphSolver::set_active_domain(&mut gpu, Some(domain)).expect("gpu domain");
-    let top = terrain.particles.iter().map(|p| p.pos[2]).fold(0.0, f64::max);
     let bodies = [BodyMarkers { first, local: &local }];
     let by_id = |ids: &[u32], range: std::ops::Range<usize>| -> Vec<u32> {
         let mut v = ids[range].to_vec();
@@ -373,15 +402,7 @@ fn active_regions_match_their_cpu_twin() {
     let (mut frozen_prev, mut frozen_checked, mut worst) = (HashMap::<u32, [u32; 7]>::new(), 0usize, [0.0f64; 4]);
     for step in 0..60 {
         let t = step as f64 * dt;
-        let state = BodyState {
-            origin: [0.1 + 0.5 * t, 0.05, top + 0.01],
-            com: [0.1 + 0.5 * t, 0.05, top + 0.01],
-            rotation: [0.0, 0.0, 0.0, 1.0],
-            linvel: [0.5, 0.0, 0.0],
-            angvel: [0.0; 3],
-            linacc: [0.0; 3],
-            angacc: [0.0; 3],
-        };
+        let state = slab_state([0.1 + 0.5 * t, 0.05, top + 0.01], 0.5);
         SphSolver::place_bodies(&mut cpu, &bodies, &[state]);
         gpu.place_bodies(&bodies, &[state]);
         let rc = cpu.step(None).expect("cpu step");
@@ -464,6 +485,45 @@ fn active_regions_match_their_cpu_twin() {
         assert_eq!(rg.awake, SphSolver::len(&gpu), "off, step {step}: all awake");
         assert_eq!(cpu.ids(), SphSolver::ids(&gpu), "off, step {step}: cell order");
     }
+}
+
+/// The device's per-step check (`cover`, twin of `CpuSph::awake_still_covered`): a resting
+/// bed with a stationary slab (its box never drifts, so never forces a classification), and a patch of surface soil
+/// under it thrown up at 5 m/s (the slab 15 cm above the surface, out of its way; the box,
+/// grown 17 cm, holds them). The thrown soil leaves the cells awake soil may be in within a
+/// few dozen steps, and only that can trigger a classification after the first; both backends
+/// must make the same ones with the same awake sets.
+#[test]
+fn awake_soil_leaving_its_cells_is_classified_again_as_on_the_cpu() {
+    let (mut cpu, mut gpu, local, first, top) = slab_over_bed(0.17, |p, top| {
+        if (p.pos[0] - 0.3).abs() < 0.03 && p.pos[2] > top - 0.025 {
+            p.vel = [0.0, 0.0, 5.0];
+        }
+    });
+    let state = slab_state([0.3, 0.05, top + 0.15], 0.0);
+    let bodies = [BodyMarkers { first, local: &local }];
+    let sorted = |ids: &[u32]| {
+        let mut v = ids.to_vec();
+        v.sort_unstable();
+        v
+    };
+    for step in 0..60 {
+        SphSolver::place_bodies(&mut cpu, &bodies, &[state]);
+        gpu.place_bodies(&bodies, &[state]);
+        let rc = cpu.step(None).expect("cpu step");
+        let rg = gpu.step(None).expect("gpu step");
+        gpu.sync().expect("sync");
+        assert_eq!(cpu.classifications(), SphSolver::classifications(&gpu), "step {step}: classifications");
+        assert_eq!((rc.awake, rc.active), (rg.awake, rg.active), "step {step}: awake, active");
+        let awake = rc.awake;
+        assert_eq!(sorted(&cpu.ids()[..awake]), sorted(&SphSolver::ids(&gpu)[..awake]), "step {step}: awake ids");
+    }
+    eprintln!("{} classifications, {} of {} awake", cpu.classifications(), cpu.awake(), cpu.active());
+    assert!(
+        cpu.classifications() >= 2,
+        "the kicked soil must leave its cells ({} classifications)",
+        cpu.classifications()
+    );
 }
 
 /// A scene's `[sph.active]` on wgpu: the rig-level path (scene, coupling layer, boxes placed
