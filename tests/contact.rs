@@ -9,11 +9,20 @@ use regolith::build::build_soil;
 /// An elastic block 0.1 × 0.1 × 0.05 m sliding along x at 1 m/s on the floor of a long box
 /// whose walls have `contact`. Returns (time, mean x velocity) after each step.
 fn slide(contact: &str, end: f64) -> Vec<(f64, f64)> {
+    slide_in("[0.8, 0.2, 0.2]", "[0.05, 0.05, 0.0]", "[0.15, 0.15, 0.05]", contact, end)
+}
+
+/// The same block filling a channel 0.1 m wide: it slides along both side walls.
+fn slide_in_channel(contact: &str, end: f64) -> Vec<(f64, f64)> {
+    slide_in("[0.8, 0.1, 0.2]", "[0.05, 0.0, 0.0]", "[0.15, 0.1, 0.05]", contact, end)
+}
+
+fn slide_in(container_max: &str, lo: &str, hi: &str, contact: &str, end: f64) -> Vec<(f64, f64)> {
     let text = format!(
         "[simulation]\nend_time = {end}\nprecision = \"f64\"\n\n[sph]\nspacing = 0.01\n\n\
          [[materials]]\nname = \"block\"\nmodel = \"elastic\"\ndensity = 1600\nyoungs_modulus = 2e6\npoisson_ratio = 0.3\n\n\
-         [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.8, 0.2, 0.2]\nsoil_contact = {contact}\n\n\
-         [[soil_blocks]]\nmaterial = \"block\"\nshape = \"box\"\nmin = [0.05, 0.05, 0.0]\nmax = [0.15, 0.15, 0.05]\nvelocity = [1.0, 0.0, 0.0]\n"
+         [container]\nmin = [0.0, 0.0, 0.0]\nmax = {container_max}\nsoil_contact = {contact}\n\n\
+         [[soil_blocks]]\nmaterial = \"block\"\nshape = \"box\"\nmin = {lo}\nmax = {hi}\nvelocity = [1.0, 0.0, 0.0]\n"
     );
     let scene = common::scene(&text);
     let mut m = build_soil::<f64>(&scene).expect("builds");
@@ -69,6 +78,36 @@ fn a_block_keeps_its_momentum_on_a_smooth_floor_and_decelerates_at_mu_g_on_a_fri
 }
 
 #[test]
+fn a_container_sets_its_floor_apart_from_its_side_walls() {
+    // A block filling a channel slides along both side walls. Smooth everywhere: nothing
+    // brakes it. Rough walls over a smooth floor: the walls alone brake it. Smooth walls over
+    // a rough floor: the floor holds it as it holds the open block. A μ floor between smooth
+    // walls is refused (one coefficient for the walls' markers; the error is checked below).
+    let free = slide_in_channel("\"smooth\"", 0.1);
+    let walls_only = slide_in_channel("{ floor = \"smooth\", walls = \"rough\" }", 0.1);
+    let floor_only = slide_in_channel("{ floor = \"rough\", walls = \"smooth\" }", 0.1);
+    let open_rough = slide("\"rough\"", 0.1);
+    let (v_free, v_w) = (at(&free, 0.1), at(&walls_only, 0.1));
+    // How far the block slid in the first 0.1 s (∫ v dt).
+    let slid = |s: &[(f64, f64)]| {
+        s.windows(2).filter(|w| w[1].0 <= 0.1).map(|w| 0.5 * (w[0].1 + w[1].1) * (w[1].0 - w[0].0)).sum::<f64>()
+    };
+    let (x_f, x_open) = (slid(&floor_only), slid(&open_rough));
+    eprintln!(
+        "channel, v(0.1 s) from 1 m/s: smooth {v_free:.4}, rough walls on a smooth floor {v_w:.4} m/s; slid in 0.1 s: \
+         smooth walls on a rough floor {:.1} mm, open block on a rough floor {:.1} mm, smooth channel {:.1} mm",
+        1e3 * x_f,
+        1e3 * x_open,
+        1e3 * slid(&free)
+    );
+    assert!((v_free - 1.0).abs() < 0.01, "smooth channel: {v_free} m/s after 0.1 s (from 1 m/s)");
+    assert!(v_w < 0.9, "rough side walls should brake the block: {v_w} m/s after 0.1 s");
+    // The rough floor grips the base of either block, which then rings back and forth about
+    // where it was caught: it slides a few millimetres, not the 100 mm of the smooth channel.
+    assert!(x_f.abs() < 0.02 && x_open.abs() < 0.02, "slid {x_f} m (channel) and {x_open} m (open) on a rough floor");
+}
+
+#[test]
 fn a_rough_contact_is_bit_identical_to_none_and_wrong_contacts_are_one_line_errors() {
     // `soil_contact = "rough"` written out changes nothing.
     let a = slide("\"rough\"", 0.01);
@@ -96,6 +135,12 @@ fn a_rough_contact_is_bit_identical_to_none_and_wrong_contacts_are_one_line_erro
     };
     assert!(err("\"slippery\"").contains("key `container.soil_contact`: \"slippery\" is not a contact; allowed:"));
     assert!(err("{ friction = -1.0 }").contains("friction must be finite and ≥ 0"));
+    assert!(
+        err("{ floor = \"smooth\", walls = { friction = 0.2 } }")
+            .contains("key `container.soil_contact`: floor (\"smooth\") and walls ({ friction = 0.2 }) differ and neither is rough"),
+        "{}",
+        err("{ floor = \"smooth\", walls = { friction = 0.2 } }")
+    );
 }
 
 #[test]

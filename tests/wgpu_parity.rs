@@ -168,10 +168,10 @@ fn pair(text: &str, seed: u64, permeable_body: bool) -> Pair {
     let acc = vec![Vec3::new(0.0f32, 0.0, 2.0); nb];
     SphSolver::set_marker_kinematics(&mut cpu, first_body, &pos, &vel, &acc);
     gpu.set_marker_kinematics(first_body, &pos, &vel, &acc);
-    if scene.wall_contact != regolith_fsi::config::WallContact::Rough {
-        let normals = regolith::build::wall_normals(&terrain, d0);
-        cpu.set_wall_contact(&[scene.wall_contact], &normals).expect("cpu contact");
-        SphSolver::set_wall_contact(&mut gpu, &[scene.wall_contact], &normals).expect("gpu contact");
+    if !scene.wall_contact.is_rough() {
+        let normals = regolith::build::wall_normals(&terrain, d0, &scene.wall_contact);
+        cpu.set_wall_contact(&[scene.wall_contact.owner()], &normals).expect("cpu contact");
+        SphSolver::set_wall_contact(&mut gpu, &[scene.wall_contact.owner()], &normals).expect("gpu contact");
     }
     if permeable_body {
         // The slab is a filter: water passes through its markers, the soil does not.

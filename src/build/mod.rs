@@ -199,7 +199,7 @@ pub fn build_soil<T: Real>(scene: &Scene) -> Result<SoilModel<T>, BuildError> {
     let wgpu = scene.backend == Backend::Wgpu;
     let mut solver =
         backend::make_solver(wgpu, 1.0, scene.solver, mats, &terrain.particles, &terrain.markers, terrain.domain)?;
-    set_contacts(solver.as_mut(), scene, &[scene.wall_contact], &terrain)?;
+    set_contacts(solver.as_mut(), scene, &[scene.wall_contact.owner()], &terrain)?;
     Ok(SoilModel { solver, terrain })
 }
 
@@ -215,26 +215,31 @@ fn set_contacts<T: Real>(
     if all_rough {
         return Ok(());
     }
-    let normals = wall_normals(terrain, scene.solver.spacing);
+    let normals = wall_normals(terrain, scene.solver.spacing, &scene.wall_contact);
     solver.set_wall_contact(contacts, &normals).map_err(BuildError::Solver)
 }
 
 /// The unit normal into the container at each wall marker (the terrain's markers, which come
 /// first in the solver's marker order): the sum of the inward normals of the faces whose plane
 /// the marker lies on or behind (markers sit on the lattice, the first layer on each wall
-/// plane), normalised, so that edges and corners get the diagonal.
-pub fn wall_normals(terrain: &TerrainBuild, d0: f64) -> Vec<[f64; 3]> {
+/// plane), normalised, so that edges and corners get the diagonal. Faces that `contact` keeps
+/// rough add nothing, so a marker behind rough faces only has no normal and stays rough, and an
+/// edge between a rough floor and a smooth wall slides along the wall.
+pub fn wall_normals(terrain: &TerrainBuild, d0: f64, contact: &crate::scene::ContainerContact) -> Vec<[f64; 3]> {
+    use regolith_fsi::config::WallContact;
     let c = &terrain.container;
+    let (floor, walls) = (contact.floor != WallContact::Rough, contact.walls != WallContact::Rough);
     terrain
         .markers
         .iter()
         .map(|m| {
             let mut n = [0.0_f64; 3];
             for (a, na) in n.iter_mut().enumerate() {
-                if m.pos[a] <= c.min[a] + 0.5 * d0 {
+                let (low, high) = if a == 2 { (floor, walls) } else { (walls, walls) };
+                if low && m.pos[a] <= c.min[a] + 0.5 * d0 {
                     *na += 1.0;
                 }
-                if m.pos[a] >= c.max[a] - 0.5 * d0 {
+                if high && m.pos[a] >= c.max[a] - 0.5 * d0 {
                     *na -= 1.0;
                 }
             }
@@ -354,8 +359,9 @@ pub fn assemble<T: Real>(scene: &Scene) -> Result<Assembly<T>, BuildError> {
     let room = if patch.is_some() { 2.0 } else { 1.0 };
     let make = |c, m, p: &[_], mk: &[_], d| backend::make_solver::<T>(wgpu, room, c, m, p, mk, d);
     let mut system = FsiSystem::with_solver(soil, rigid, fsi_bodies, scene.exchange_interval, &make)?;
-    let contacts: Vec<_> =
-        std::iter::once(scene.wall_contact).chain(scene.bodies.iter().filter(|b| b.fsi).map(|b| b.contact)).collect();
+    let contacts: Vec<_> = std::iter::once(scene.wall_contact.owner())
+        .chain(scene.bodies.iter().filter(|b| b.fsi).map(|b| b.contact))
+        .collect();
     set_contacts(system.fluid.as_mut(), &scene, &contacts, &terrain)?;
     let permeable: Vec<bool> =
         std::iter::once(false).chain(scene.bodies.iter().filter(|b| b.fsi).map(|b| b.permeable)).collect();

@@ -5,7 +5,7 @@
 
 mod summary;
 
-pub use summary::{BodySummary, Geostatic, Runout, SUMMARY_SCHEMA_VERSION, Summary};
+pub use summary::{BodySummary, Geostatic, Runout, SUMMARY_SCHEMA_VERSION, Slump, Summary};
 
 pub use crate::driver::{RunError, StopToken};
 
@@ -77,11 +77,12 @@ struct Ran<T: Real> {
     bekker: Option<crate::rig::bekker::BekkerFit>,
     figures: Vec<(String, crate::output::Figure)>,
     initial: Option<Vec<[f64; 3]>>,
+    initial_ids: Option<Vec<(u32, [f64; 3])>>,
 }
 
 impl<T: Real> Default for Ran<T> {
     fn default() -> Self {
-        Self { sim: None, series: None, rig: None, bekker: None, figures: Vec::new(), initial: None }
+        Self { sim: None, series: None, rig: None, bekker: None, figures: Vec::new(), initial: None, initial_ids: None }
     }
 }
 
@@ -127,10 +128,12 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
             bekker: out.bekker,
             figures: out.figures,
             initial: None,
+            initial_ids: None,
         }
     } else {
         let mut sim = Simulation::<T>::new(scene)?;
         let initial = summary::soil_points(sim.system.fluid.as_ref());
+        let initial_ids = summary::soil_by_id(sim.system.fluid.as_ref());
         driver.observe(&mut terrain_series);
         driver.begin(&sim, None)?;
         while !driver.done(&sim) {
@@ -139,12 +142,12 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
                 break;
             }
         }
-        Ran { sim: Some(sim), initial: Some(initial), ..Ran::default() }
+        Ran { sim: Some(sim), initial: Some(initial), initial_ids: Some(initial_ids), ..Ran::default() }
     };
     driver.finish()?;
     let stats = driver.stats.clone();
     drop(driver);
-    let Ran { sim, series, rig, bekker, mut figures, initial } = ran;
+    let Ran { sim, series, rig, bekker, mut figures, initial, initial_ids } = ran;
     let series = series.or_else(|| initial.is_some().then_some(terrain_series.0));
     let mut outputs = Vec::new();
     #[cfg(feature = "mcap")]
@@ -212,6 +215,10 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
         error: failure.as_ref().map(|e| e.to_string()),
         runout: match (&last_soil, &initial) {
             (Some(l), Some(i)) => summary::column_runout(scene, i, l),
+            _ => None,
+        },
+        slump: match (fluid, &initial_ids) {
+            (Some(f), Some(i)) => summary::slump(scene, i, &summary::soil_by_id(f)),
             _ => None,
         },
         geostatic: match (fluid, &initial) {

@@ -47,6 +47,51 @@ pub struct Runout {
     pub final_height: f64,
 }
 
+/// A plane-strain collapse: a block of soil against one end wall of the container, released
+/// towards the other (Bui et al. 2008's aluminium-bar test). Lengths are along x from that
+/// wall.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Slump {
+    /// x of the wall the block leaned on (m).
+    pub wall_x: f64,
+    /// +1 when the soil runs out towards +x, −1 towards −x.
+    pub direction: f64,
+    /// Initial length L0 of the block along x (m).
+    pub initial_length: f64,
+    /// Initial height H0 (m).
+    pub initial_height: f64,
+    /// Final length L∞ from the wall to the toe (m): L0 plus the growth of the distance that
+    /// holds 99 % of the particles (the estimator of [`Runout`], applied to both states).
+    pub final_length: f64,
+    /// (L∞ − L0) / L0.
+    pub normalized: f64,
+    /// Final height of the deposit at the wall (m).
+    pub final_height: f64,
+    /// Distance from the wall at which the deposit's thickness has fallen to a tenth of H0
+    /// (m): the thickness of columns one spacing long is their particles' lattice volume
+    /// (d0³ each) over the column's floor area (d0 × the lattice's width, the initial
+    /// particles' volume over L0 H0), so it varies in
+    /// steps far finer than d0; the columns are walked out from the wall and the crossing is
+    /// interpolated between the last column at or above the level and the first below it.
+    /// Unlike the 99 % reach it does not hang on the sparse grains of a thin tail, and a
+    /// digitised experimental profile gives it too.
+    pub reach_tenth: f64,
+    /// (reach_tenth − L0) / L0.
+    pub reach_tenth_normalized: f64,
+    /// Angle of the failure surface with the horizontal (degrees): the slope of the boundary
+    /// between soil that moved more than `moved_threshold` and soil that did not, fitted by
+    /// least squares over the initial lattice rows between 10 % and 90 % of H0 (each row's
+    /// boundary placed at its fraction of unmoved particles times L0). `None` when fewer than
+    /// three rows hold both.
+    pub failure_angle_deg: Option<f64>,
+    /// Displacement above which a particle counts as moved (m): 1.5 % of H0 (1.5 mm in Bui et
+    /// al.'s 0.1 m body, the bars' size, which is how the experiment's undisturbed region was
+    /// read).
+    pub moved_threshold: f64,
+    /// Rows the angle was fitted over.
+    pub failure_rows: usize,
+}
+
 /// The stresses of a flat bed at mid-depth against the geostatic state: the closed form
 /// σv = ρ g depth and σh = K0 σv. Read from the particles of the lattice layer nearest
 /// mid-depth, three spacings or more from the side walls (the walls' own stress layer is left
@@ -130,6 +175,8 @@ pub struct Summary {
     pub error: Option<String>,
     /// Column-collapse runout, for scenes whose soil is one cylinder.
     pub runout: Option<Runout>,
+    /// Plane-strain collapse, for scenes whose soil is one block against an end wall.
+    pub slump: Option<Slump>,
     /// Mid-depth stresses of a bed at rest, for scenes whose soil is one flat bed and that
     /// hold no body.
     pub geostatic: Option<Geostatic>,
@@ -197,6 +244,124 @@ fn deposit_radius(points: impl Iterator<Item = [f64; 3]>, axis: [f64; 2], d0: f6
 pub(super) fn soil_points<T: Real>(s: &dyn SphSolver<T>) -> Vec<[f64; 3]> {
     let (mats, ids) = (s.materials(), s.material_ids());
     (0..s.active()).filter(|&i| !mats[ids[i] as usize].is_water()).map(|i| s.positions()[i].as_f64()).collect()
+}
+
+/// The soil particles still in the domain (water left out) by original id: what a
+/// displacement field is measured on.
+pub(super) fn soil_by_id<T: Real>(s: &dyn SphSolver<T>) -> Vec<(u32, [f64; 3])> {
+    let (mats, ids) = (s.materials(), s.material_ids());
+    (0..s.active())
+        .filter(|&i| !mats[ids[i] as usize].is_water())
+        .map(|i| (s.ids()[i], s.positions()[i].as_f64()))
+        .collect()
+}
+
+/// The plane-strain collapse of a scene whose soil is one block with a container end wall
+/// (x) within half a spacing of one of its x faces; `None` otherwise, and for a block that
+/// touches both.
+pub(super) fn slump(scene: &Scene, initial: &[(u32, [f64; 3])], last: &[(u32, [f64; 3])]) -> Option<Slump> {
+    let mut soil = scene.soil.iter().filter(|s| !scene.materials[s.material].is_water());
+    let (Some(only), None) = (soil.next(), soil.next()) else { return None };
+    let SoilRegion::Block(b) = only.region else { return None };
+    let c = scene.container.as_ref()?;
+    if !scene.container_walls {
+        return None;
+    }
+    let d0 = scene.solver.spacing;
+    let (at_min, at_max) = ((b.min[0] - c.min[0]).abs() < 0.5 * d0, (c.max[0] - b.max[0]).abs() < 0.5 * d0);
+    let (wall_x, dir) = match (at_min, at_max) {
+        (true, false) => (c.min[0], 1.0),
+        (false, true) => (c.max[0], -1.0),
+        _ => return None,
+    };
+    let (l0, h0, base) = (b.max[0] - b.min[0], b.max[2] - b.min[2], b.min[2]);
+    let reach = |pts: &mut dyn Iterator<Item = f64>| {
+        let mut d: Vec<f64> = pts.collect();
+        if d.is_empty() {
+            return 0.0;
+        }
+        d.sort_by(f64::total_cmp);
+        let k = ((d.len() as f64 * 0.99).ceil() as usize).clamp(1, d.len()) - 1;
+        d[k] + 0.5 * d0
+    };
+    let l0_est = reach(&mut initial.iter().map(|(_, p)| dir * (p[0] - wall_x)));
+    let lf_est = reach(&mut last.iter().map(|(_, p)| dir * (p[0] - wall_x)));
+    let lf = l0 + (lf_est - l0_est);
+    let final_height = last
+        .iter()
+        .filter(|(_, p)| dir * (p[0] - wall_x) < 1.5 * d0)
+        .map(|(_, p)| p[2] - base + 0.5 * d0)
+        .fold(0.0, f64::max);
+    // Displacements by id; each initial lattice row's share of unmoved particles.
+    // The lattice's own width: the generator fits whole spacings into the block, so the
+    // block's nominal width can hold one layer fewer than it seems to (the initial column then
+    // reads H0 from its particles, whatever the fit).
+    let width = initial.len() as f64 * d0.powi(3) / (l0 * h0);
+    let reach_tenth = tenth_height_reach(last.iter().map(|(_, p)| dir * (p[0] - wall_x)), h0, d0, width);
+    let threshold = 0.015 * h0;
+    let end: std::collections::HashMap<u32, [f64; 3]> = last.iter().copied().collect();
+    let zmin = initial.iter().map(|(_, p)| p[2]).fold(f64::INFINITY, f64::min);
+    let mut rows: std::collections::BTreeMap<i64, (usize, usize, f64)> = Default::default();
+    for (id, p) in initial {
+        let moved = end
+            .get(id)
+            .is_none_or(|q| ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt() > threshold);
+        let r = rows.entry(((p[2] - zmin) / d0).round() as i64).or_insert((0, 0, 0.0));
+        r.0 += 1;
+        r.1 += usize::from(!moved);
+        r.2 = p[2] - base;
+    }
+    let pts: Vec<(f64, f64)> = rows
+        .values()
+        .filter(|(n, still, z)| *still > 0 && still < n && *z > 0.1 * h0 && *z < 0.9 * h0)
+        .map(|(n, still, z)| (*z, *still as f64 / *n as f64 * l0))
+        .collect();
+    let failure_angle_deg = (pts.len() >= 3).then(|| {
+        let m = pts.len() as f64;
+        let (mz, mx) = (pts.iter().map(|p| p.0).sum::<f64>() / m, pts.iter().map(|p| p.1).sum::<f64>() / m);
+        let szz: f64 = pts.iter().map(|p| (p.0 - mz).powi(2)).sum();
+        let szx: f64 = pts.iter().map(|p| (p.0 - mz) * (p.1 - mx)).sum();
+        // x_b = a + (dx/dz) z; the surface rises at atan(1 / |dx/dz|) from the horizontal.
+        (szz / szx.abs()).atan().to_degrees()
+    });
+    Some(Slump {
+        wall_x,
+        direction: dir,
+        initial_length: l0,
+        initial_height: h0,
+        final_length: lf,
+        normalized: (lf - l0) / l0,
+        final_height,
+        reach_tenth,
+        reach_tenth_normalized: (reach_tenth - l0) / l0,
+        failure_angle_deg,
+        moved_threshold: threshold,
+        failure_rows: pts.len(),
+    })
+}
+
+/// See [`Slump::reach_tenth`]: `points` are distances from the wall; each particle stands for
+/// a lattice cell d0³ spread over a column `d0` long and `width` wide.
+fn tenth_height_reach(points: impl Iterator<Item = f64>, h0: f64, d0: f64, width: f64) -> f64 {
+    let mut thick: Vec<f64> = Vec::new();
+    for x in points {
+        if x < 0.0 {
+            continue;
+        }
+        let k = (x / d0) as usize;
+        if thick.len() <= k {
+            thick.resize(k + 1, 0.0);
+        }
+        thick[k] += d0 * d0 / width;
+    }
+    // Past the farthest particle the deposit has no height.
+    thick.push(0.0);
+    let level = 0.1 * h0;
+    let centre = |k: usize| (k as f64 + 0.5) * d0;
+    match thick.iter().position(|t| *t < level) {
+        Some(k) if k > 0 => centre(k - 1) + (thick[k - 1] - level) / (thick[k - 1] - thick[k]) * d0,
+        _ => 0.0,
+    }
 }
 
 /// The runout of a scene whose soil is one cylinder (water blocks aside: a saturated column
@@ -284,4 +449,92 @@ pub(super) fn geostatic_state<T: Real>(scene: &Scene, s: &dyn SphSolver<T>) -> O
         k_ratio: sh / sv,
         k0: material.k0().as_f64(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A block 0.2 m long and 0.1 m high against the wall at x = 0, on a 5 mm lattice.
+    fn block_scene(d0: f64) -> Scene {
+        let text = format!(
+            "[simulation]\nend_time = 0.1\n\n[sph]\nspacing = {d0}\n\n[[materials]]\nname = \"bars\"\n\
+             model = \"drucker-prager\"\ndensity = 2650\nyoungs_modulus = 8.4e5\npoisson_ratio = 0.3\n\
+             friction_angle = 19.8\n\n[container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.6, 0.02, 0.15]\n\n\
+             [[soil_blocks]]\nmaterial = \"bars\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.2, 0.02, 0.1]\n"
+        );
+        crate::scene::load_scene_source(std::path::Path::new("slump.toml"), &text, &[]).expect("scene")
+    }
+
+    fn lattice(d0: f64) -> Vec<(u32, [f64; 3])> {
+        let mut pts = Vec::new();
+        for i in 0..40 {
+            for j in 0..4 {
+                for k in 0..20 {
+                    let p = [(i as f64 + 0.5) * d0, (j as f64 + 0.5) * d0, (k as f64 + 0.5) * d0];
+                    pts.push((pts.len() as u32, p));
+                }
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn a_slump_reads_the_failure_angle_and_the_reach_it_was_given() {
+        let d0 = 0.005;
+        let scene = block_scene(d0);
+        let initial = lattice(d0);
+        // Soil beyond a 35° line from the toe (0.2, 0) slides 2 cm out and 1 cm down; the rest
+        // stays. The reach at 1 cm height of the moved block is then its own front edge.
+        let tan = 35f64.to_radians().tan();
+        let last: Vec<(u32, [f64; 3])> = initial
+            .iter()
+            .map(|&(id, p)| if p[0] > 0.2 - p[2] / tan { (id, [p[0] + 0.02, p[1], p[2] - 0.01]) } else { (id, p) })
+            .collect();
+        let s = slump(&scene, &initial, &last).expect("a block against the wall");
+        assert_eq!((s.wall_x, s.direction, s.initial_length, s.initial_height), (0.0, 1.0, 0.2, 0.1));
+        let angle = s.failure_angle_deg.expect("rows on both sides");
+        // Rows are 5 mm apart and each row's boundary is quantised to a particle: 1° is two
+        // particles' worth of slope over the 8 cm fitted.
+        assert!((angle - 35.0).abs() < 1.0, "failure angle {angle}");
+        assert!(s.failure_rows >= 14, "{} rows", s.failure_rows);
+        // Everything at the toe moved 2 cm out: the 99 % reach grows by 2 cm.
+        assert!((s.final_length - 0.22).abs() < 1e-9, "final length {}", s.final_length);
+        assert!((s.final_height - 0.1).abs() < 1e-9, "the wall's soil stayed: {}", s.final_height);
+        // The moved soil is still at least 2 cm thick at its front (the toe's rows moved
+        // together), far above a tenth of H0: the reach is interpolated from the last column's
+        // centre (0.2175 m) towards the empty one beyond (centre 0.2225 m).
+        assert!(s.reach_tenth > 0.2175 && s.reach_tenth < 0.2225, "reach {}", s.reach_tenth);
+        // Nothing moved: no boundary, no angle.
+        let still = slump(&scene, &initial, &initial).expect("slump");
+        assert_eq!((still.failure_angle_deg, still.failure_rows, still.normalized), (None, 0, 0.0));
+    }
+
+    #[test]
+    fn the_tenth_height_reach_interpolates_a_linear_profile() {
+        // A wedge whose thickness falls from 0.1 m at the wall to 0 at 0.5 m, 20 particles
+        // wide (each particle d0 / 20 = 0.25 mm of thickness): a tenth of 0.1 m is reached at
+        // 0.45 m.
+        let (h0, d0) = (0.1, 0.005);
+        let mut pts = Vec::new();
+        for i in 0..100 {
+            let x = (i as f64 + 0.5) * d0;
+            let n = (0.1 * (1.0 - x / 0.5) / (d0 / 20.0)).round() as usize;
+            pts.extend(std::iter::repeat_n(x, n));
+        }
+        let r = tenth_height_reach(pts.into_iter(), h0, d0, 20.0 * d0);
+        // Thickness quantised to 0.25 mm on a slope of 0.2: the 1 cm line is met within
+        // half a spacing of 0.45 m.
+        assert!((r - 0.45).abs() < 0.5 * d0, "reach {r}");
+        // A column of 3 particles across a width of 4 d0 is 0.75 d0 thick: finer than a layer.
+        let r = tenth_height_reach([0.001, 0.002, 0.003, 0.006, 0.007].into_iter(), 0.05, d0, 4.0 * d0);
+        // Columns 0.75 d0 and 0.5 d0 thick (3.75 and 2.5 mm) against a level of 5 mm: none
+        // reaches it.
+        assert_eq!(r, 0.0);
+        let r = tenth_height_reach([0.001, 0.002, 0.003, 0.006, 0.007].into_iter(), 0.03, d0, 4.0 * d0);
+        // Level 3 mm: the first column (3.75 mm) is above, the second (2.5 mm) below; the
+        // crossing lies 0.6 of the way between their centres.
+        assert!((r - (0.5 + 0.6) * d0).abs() < 1e-12, "reach {r}");
+        assert_eq!(tenth_height_reach(std::iter::empty(), h0, d0, d0), 0.0);
+    }
 }

@@ -59,6 +59,7 @@ pub use types::{
     WheelDrive,
 };
 
+pub use contact::ContainerContact;
 pub use vehicle::{Profile, VehicleSpec, WheelSpec};
 
 use std::path::{Path, PathBuf};
@@ -129,11 +130,11 @@ fn resolve(path: &Path, source: &str, file: SceneFile) -> Result<Scene, InputErr
     let (spacing, bce_layers) = (solver.spacing, solver.bce_layers);
     let (materials, container, soil) = resolve_soil(path, source, dir, &file, spacing, &e)?;
     let wall_contact = match file.container.as_ref().and_then(|c| c.soil_contact.as_ref()) {
-        None => WallContact::Rough,
-        Some(v) => contact::parse_contact(v).map_err(|m| e("container.soil_contact", m))?,
+        None => ContainerContact::ROUGH,
+        Some(v) => contact::parse_container_contact(v).map_err(|m| e("container.soil_contact", m))?,
     };
     let container_walls = file.container.as_ref().and_then(|c| c.walls).unwrap_or(true);
-    if !container_walls && wall_contact != WallContact::Rough {
+    if !container_walls && !wall_contact.is_rough() {
         return Err(e(
             "container.soil_contact",
             "is set but container.walls = false (there is no wall to slide on); remove one of them".into(),

@@ -259,8 +259,9 @@ pub struct Scene {
     /// that leaves the container's domain (a few spacings beyond it) escapes: a sink. Bodies
     /// then carry the soil.
     pub container_walls: bool,
-    /// How soil slides along the container walls (`[container] soil_contact`; rough by default).
-    pub wall_contact: WallContact,
+    /// How soil slides along the container's floor and walls (`[container] soil_contact`; rough
+    /// by default).
+    pub wall_contact: ContainerContact,
     /// Soil regions.
     pub soil: Vec<SoilSpec>,
     /// Rigid bodies.
