@@ -62,11 +62,11 @@ fn tall_column_a3_matches_lube() {
 /// side walls (the accuracy case, at d0 = 7.07 mm: 1 960 particles, about 20 s). The
 /// experiment (digitised profile and failure line, see the case file): reach at a tenth of the
 /// height (x₁₀ − L0)/L0 = 0.842, failure surface at 34.9°, the height at the wall unchanged.
-/// Measured here when this test was written: 0.737 (−12.5 %) and 28.3° (the study's ladder:
-/// −15.4, −12.5, −12.4 % and 28.6°, 28.3°, 31.9° at 10, 7.07 and 5 mm). The same run with
-/// rough side walls, the only walls a container had before `{ floor, walls }`, reads 0.486
-/// (−42 %) and 53°: the walls hold the soil, which is why a plane-strain test needs them
-/// smooth.
+/// Measured here: 0.805 (−4.4 %) and 28.3°; the study's ladder (docs/accuracy) reads +1.0,
+/// −4.4, +3.6, +2.4 % and 28.6°, 28.3°, 31.9°, 27.5° at 10, 7.07, 5 and 3.54 mm, and its knobs
+/// at 5 mm scatter the reach over +2.0 to +7.6 %. The same run with rough side walls, the only
+/// walls a container had before `{ floor, walls }`, reads 0.484 (−42 %) and 53°: the walls hold
+/// the soil, which is why a plane-strain test needs them smooth.
 #[test]
 fn bui_2008s_plane_strain_slump_runs_out_between_smooth_walls_and_is_held_by_rough_ones() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/study/bui_collapse.toml");
@@ -98,10 +98,11 @@ fn bui_2008s_plane_strain_slump_runs_out_between_smooth_walls_and_is_held_by_rou
             s.final_height
         );
     }
-    // Within 20 % of the experiment's reach and 25 % of its angle at this coarse level (measured
-    // −12.5 % and −19 %; the ladder closes neither gap much by 5 mm, see docs/accuracy).
+    // Within 10 % of the experiment's reach (the knobs' scatter reaches 7.6 %) and 25 % of its
+    // angle (measured −19 % here; the ladder's surfaces are 9–21 % shallower than the
+    // experiment's, a miss refinement does not close).
     assert!(
-        (plane.reach_tenth_normalized / 0.842 - 1.0).abs() < 0.2,
+        (plane.reach_tenth_normalized / 0.842 - 1.0).abs() < 0.1,
         "reach {:.3} vs 0.842",
         plane.reach_tenth_normalized
     );

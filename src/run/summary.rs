@@ -68,11 +68,13 @@ pub struct Slump {
     /// Final height of the deposit at the wall (m).
     pub final_height: f64,
     /// Distance from the wall at which the deposit's thickness has fallen to a tenth of H0
-    /// (m): the thickness of columns one spacing long is their particles' lattice volume
-    /// (d0³ each) over the column's floor area (d0 × the lattice's width, the initial
-    /// particles' volume over L0 H0), so it varies in
-    /// steps far finer than d0; the columns are walked out from the wall and the crossing is
-    /// interpolated between the last column at or above the level and the first below it.
+    /// (m): the thickness of columns H0 / 5 long (or d0, if larger) is their particles'
+    /// lattice volume (d0³ each) over the column's floor area (its length × the lattice's
+    /// width, the initial particles' volume over L0 H0), so it varies in steps far finer than
+    /// d0 and the same columns serve every level of a d0 ladder. The crossing
+    /// is interpolated between the farthest column at or above the level and the next one out
+    /// (so a deposit that slid off the wall, thin there and thick farther out, still reads
+    /// its front).
     /// Unlike the 99 % reach it does not hang on the sparse grains of a thin tail, and a
     /// digitised experimental profile gives it too.
     pub reach_tenth: f64,
@@ -297,7 +299,11 @@ pub(super) fn slump(scene: &Scene, initial: &[(u32, [f64; 3])], last: &[(u32, [f
     // block's nominal width can hold one layer fewer than it seems to (the initial column then
     // reads H0 from its particles, whatever the fit).
     let width = initial.len() as f64 * d0.powi(3) / (l0 * h0);
-    let reach_tenth = tenth_height_reach(last.iter().map(|(_, p)| dir * (p[0] - wall_x)), h0, d0, width);
+    // Columns a fifth of H0 long whatever d0 (2 cm in Bui's body): a column one spacing long
+    // holds few particles at the coarse levels, and its count's scatter moved the crossing by
+    // up to 6 cm at d0 = 1 cm.
+    let bin = (0.2 * h0).max(d0);
+    let reach_tenth = tenth_height_reach(last.iter().map(|(_, p)| dir * (p[0] - wall_x)), h0, d0, width, bin);
     let threshold = 0.015 * h0;
     let end: std::collections::HashMap<u32, [f64; 3]> = last.iter().copied().collect();
     let zmin = initial.iter().map(|(_, p)| p[2]).fold(f64::INFINITY, f64::min);
@@ -341,26 +347,28 @@ pub(super) fn slump(scene: &Scene, initial: &[(u32, [f64; 3])], last: &[(u32, [f
 }
 
 /// See [`Slump::reach_tenth`]: `points` are distances from the wall; each particle stands for
-/// a lattice cell d0³ spread over a column `d0` long and `width` wide.
-fn tenth_height_reach(points: impl Iterator<Item = f64>, h0: f64, d0: f64, width: f64) -> f64 {
+/// a lattice cell d0³ spread over a column `bin` long and `width` wide.
+fn tenth_height_reach(points: impl Iterator<Item = f64>, h0: f64, d0: f64, width: f64, bin: f64) -> f64 {
     let mut thick: Vec<f64> = Vec::new();
     for x in points {
         if x < 0.0 {
             continue;
         }
-        let k = (x / d0) as usize;
+        let k = (x / bin) as usize;
         if thick.len() <= k {
             thick.resize(k + 1, 0.0);
         }
-        thick[k] += d0 * d0 / width;
+        thick[k] += d0.powi(3) / (width * bin);
     }
     // Past the farthest particle the deposit has no height.
     thick.push(0.0);
     let level = 0.1 * h0;
-    let centre = |k: usize| (k as f64 + 0.5) * d0;
-    match thick.iter().position(|t| *t < level) {
-        Some(k) if k > 0 => centre(k - 1) + (thick[k - 1] - level) / (thick[k - 1] - thick[k]) * d0,
-        _ => 0.0,
+    let centre = |k: usize| (k as f64 + 0.5) * bin;
+    // The farthest column at or above the level (a deposit that slid off the wall may be thin
+    // there and thick farther out), and the crossing towards the next one.
+    match thick.iter().rposition(|t| *t >= level) {
+        Some(k) => centre(k) + (thick[k] - level) / (thick[k] - thick[k + 1]) * bin,
+        None => 0.0,
     }
 }
 
@@ -501,10 +509,10 @@ mod tests {
         // Everything at the toe moved 2 cm out: the 99 % reach grows by 2 cm.
         assert!((s.final_length - 0.22).abs() < 1e-9, "final length {}", s.final_length);
         assert!((s.final_height - 0.1).abs() < 1e-9, "the wall's soil stayed: {}", s.final_height);
-        // The moved soil is still at least 2 cm thick at its front (the toe's rows moved
-        // together), far above a tenth of H0: the reach is interpolated from the last column's
-        // centre (0.2175 m) towards the empty one beyond (centre 0.2225 m).
-        assert!(s.reach_tenth > 0.2175 && s.reach_tenth < 0.2225, "reach {}", s.reach_tenth);
+        // The moved soil ends at 0.2175 m, still thick there (the toe's rows moved together):
+        // over columns H0 / 5 = 2 cm long the crossing lies between the centre of the last
+        // filled column (0.21 m) and that of the empty one beyond (0.23 m).
+        assert!(s.reach_tenth > 0.21 && s.reach_tenth < 0.23, "reach {}", s.reach_tenth);
         // Nothing moved: no boundary, no angle.
         let still = slump(&scene, &initial, &initial).expect("slump");
         assert_eq!((still.failure_angle_deg, still.failure_rows, still.normalized), (None, 0, 0.0));
@@ -522,19 +530,27 @@ mod tests {
             let n = (0.1 * (1.0 - x / 0.5) / (d0 / 20.0)).round() as usize;
             pts.extend(std::iter::repeat_n(x, n));
         }
-        let r = tenth_height_reach(pts.into_iter(), h0, d0, 20.0 * d0);
+        let r = tenth_height_reach(pts.iter().copied(), h0, d0, 20.0 * d0, d0);
         // Thickness quantised to 0.25 mm on a slope of 0.2: the 1 cm line is met within
         // half a spacing of 0.45 m.
         assert!((r - 0.45).abs() < 0.5 * d0, "reach {r}");
+        // Columns four spacings long average a linear profile to its value at their centre:
+        // the same crossing.
+        let r = tenth_height_reach(pts.iter().copied(), h0, d0, 20.0 * d0, 4.0 * d0);
+        assert!((r - 0.45).abs() < 0.5 * d0, "reach over 2 cm columns {r}");
         // A column of 3 particles across a width of 4 d0 is 0.75 d0 thick: finer than a layer.
-        let r = tenth_height_reach([0.001, 0.002, 0.003, 0.006, 0.007].into_iter(), 0.05, d0, 4.0 * d0);
+        let r = tenth_height_reach([0.001, 0.002, 0.003, 0.006, 0.007].into_iter(), 0.05, d0, 4.0 * d0, d0);
         // Columns 0.75 d0 and 0.5 d0 thick (3.75 and 2.5 mm) against a level of 5 mm: none
         // reaches it.
         assert_eq!(r, 0.0);
-        let r = tenth_height_reach([0.001, 0.002, 0.003, 0.006, 0.007].into_iter(), 0.03, d0, 4.0 * d0);
+        let r = tenth_height_reach([0.001, 0.002, 0.003, 0.006, 0.007].into_iter(), 0.03, d0, 4.0 * d0, d0);
         // Level 3 mm: the first column (3.75 mm) is above, the second (2.5 mm) below; the
         // crossing lies 0.6 of the way between their centres.
         assert!((r - (0.5 + 0.6) * d0).abs() < 1e-12, "reach {r}");
-        assert_eq!(tenth_height_reach(std::iter::empty(), h0, d0, d0), 0.0);
+        assert_eq!(tenth_height_reach(std::iter::empty(), h0, d0, d0, d0), 0.0);
+        // Slid off the wall: empty near it, one column 2 cm thick at 0.3 m. The front is that
+        // column's, not zero.
+        let r = tenth_height_reach(std::iter::repeat_n(0.301, 4), 0.1, d0, d0, d0);
+        assert!((r - (0.3025 + 0.5 * d0)).abs() < 1e-12, "reach {r}");
     }
 }
