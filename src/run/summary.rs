@@ -68,13 +68,12 @@ pub struct Slump {
     /// Final height of the deposit at the wall (m).
     pub final_height: f64,
     /// Distance from the wall at which the deposit's thickness has fallen to a tenth of H0
-    /// (m): the thickness of columns H0 / 5 long (or d0, if larger) is their particles'
+    /// (m). The thickness of columns H0 / 5 long (or d0, if larger) is their particles'
     /// lattice volume (d0³ each) over the column's floor area (its length × the lattice's
     /// width, the initial particles' volume over L0 H0), so it varies in steps far finer than
-    /// d0 and the same columns serve every level of a d0 ladder. The crossing
-    /// is interpolated between the farthest column at or above the level and the next one out
-    /// (so a deposit that slid off the wall, thin there and thick farther out, still reads
-    /// its front).
+    /// d0 and the same columns serve every level of a d0 ladder. The crossing is interpolated
+    /// between the farthest column at or above the level and the next one out (so a deposit
+    /// that slid off the wall, thin there and thick farther out, still reads its front).
     /// Unlike the 99 % reach it does not hang on the sparse grains of a thin tail, and a
     /// digitised experimental profile gives it too.
     pub reach_tenth: f64,
@@ -294,7 +293,6 @@ pub(super) fn slump(scene: &Scene, initial: &[(u32, [f64; 3])], last: &[(u32, [f
         .filter(|(_, p)| dir * (p[0] - wall_x) < 1.5 * d0)
         .map(|(_, p)| p[2] - base + 0.5 * d0)
         .fold(0.0, f64::max);
-    // Displacements by id; each initial lattice row's share of unmoved particles.
     // The lattice's own width: the generator fits whole spacings into the block, so the
     // block's nominal width can hold one layer fewer than it seems to (the initial column then
     // reads H0 from its particles, whatever the fit).
@@ -304,6 +302,7 @@ pub(super) fn slump(scene: &Scene, initial: &[(u32, [f64; 3])], last: &[(u32, [f
     // up to 6 cm at d0 = 1 cm.
     let bin = (0.2 * h0).max(d0);
     let reach_tenth = tenth_height_reach(last.iter().map(|(_, p)| dir * (p[0] - wall_x)), h0, d0, width, bin);
+    // Displacements by id; each initial lattice row's share of unmoved particles.
     let threshold = 0.015 * h0;
     let end: std::collections::HashMap<u32, [f64; 3]> = last.iter().copied().collect();
     let zmin = initial.iter().map(|(_, p)| p[2]).fold(f64::INFINITY, f64::min);
@@ -493,7 +492,7 @@ mod tests {
         let scene = block_scene(d0);
         let initial = lattice(d0);
         // Soil beyond a 35° line from the toe (0.2, 0) slides 2 cm out and 1 cm down; the rest
-        // stays. The reach at 1 cm height of the moved block is then its own front edge.
+        // stays.
         let tan = 35f64.to_radians().tan();
         let last: Vec<(u32, [f64; 3])> = initial
             .iter()
