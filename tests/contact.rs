@@ -1,6 +1,7 @@
 //! Soil contact of walls and bodies (`soil_contact`): a block sliding on a smooth floor keeps
 //! its momentum; on a Coulomb floor of coefficient μ it decelerates at μ g; a rough floor (the
-//! default) holds it. Smooth and frictional walls are CPU-only: wgpu refuses them in one line.
+//! default) holds it. A container sets its floor and side walls apart. The wgpu twin of the
+//! contact is checked in `tests/wgpu_parity.rs`; bodies take only rough contact (one-line error).
 
 use crate::common;
 
