@@ -23,7 +23,10 @@ pub enum KernelKind {
 pub enum Integrator {
     /// Explicit midpoint (second order, two rate evaluations per step). Default.
     Rk2,
-    /// Symplectic-style explicit Euler (first order, one rate evaluation per step).
+    /// Symplectic-style explicit Euler (first order, one rate evaluation per step). The stress
+    /// rate comes from the velocity gradient at the start of the step, so the elastic response
+    /// is forward Euler on a wave equation: unstable for soil at rest (the accuracy study's
+    /// geostatic bed blows apart), usable only where plastic flow damps it.
     Euler,
 }
 
