@@ -76,13 +76,13 @@ struct Ran<T: Real> {
     rig: Option<serde_json::Value>,
     bekker: Option<crate::rig::bekker::BekkerFit>,
     figures: Vec<(String, crate::output::Figure)>,
-    initial: Option<Vec<[f64; 3]>>,
-    initial_ids: Option<Vec<(u32, [f64; 3])>>,
+    /// The soil by particle id at the start (scenes without a rig: collapses and beds).
+    initial: Option<Vec<(u32, [f64; 3])>>,
 }
 
 impl<T: Real> Default for Ran<T> {
     fn default() -> Self {
-        Self { sim: None, series: None, rig: None, bekker: None, figures: Vec::new(), initial: None, initial_ids: None }
+        Self { sim: None, series: None, rig: None, bekker: None, figures: Vec::new(), initial: None }
     }
 }
 
@@ -128,12 +128,10 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
             bekker: out.bekker,
             figures: out.figures,
             initial: None,
-            initial_ids: None,
         }
     } else {
         let mut sim = Simulation::<T>::new(scene)?;
-        let initial = summary::soil_points(sim.system.fluid.as_ref());
-        let initial_ids = summary::soil_by_id(sim.system.fluid.as_ref());
+        let initial = summary::soil_by_id(sim.system.fluid.as_ref());
         driver.observe(&mut terrain_series);
         driver.begin(&sim, None)?;
         while !driver.done(&sim) {
@@ -142,12 +140,12 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
                 break;
             }
         }
-        Ran { sim: Some(sim), initial: Some(initial), initial_ids: Some(initial_ids), ..Ran::default() }
+        Ran { sim: Some(sim), initial: Some(initial), ..Ran::default() }
     };
     driver.finish()?;
     let stats = driver.stats.clone();
     drop(driver);
-    let Ran { sim, series, rig, bekker, mut figures, initial, initial_ids } = ran;
+    let Ran { sim, series, rig, bekker, mut figures, initial } = ran;
     let series = series.or_else(|| initial.is_some().then_some(terrain_series.0));
     let mut outputs = Vec::new();
     #[cfg(feature = "mcap")]
@@ -156,7 +154,14 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
     }
     let wall = stats.elapsed();
     let fluid = sim.as_ref().map(|s| s.system.fluid.as_ref());
-    let last_soil = fluid.map(|f| summary::soil_points(f));
+    // The soil at the start and at the end, by id and as plain positions (what the runout and
+    // the deposit profile read), for the scenes that sampled the start.
+    let last_soil = fluid.filter(|_| initial.is_some()).map(|f| summary::soil_by_id(f));
+    let positions = |v: &[(u32, [f64; 3])]| v.iter().map(|p| p.1).collect::<Vec<_>>();
+    let ends = match (&initial, &last_soil) {
+        (Some(i), Some(l)) => Some((positions(i), positions(l))),
+        _ => None,
+    };
     let mut summary = Summary {
         schema_version: SUMMARY_SCHEMA_VERSION,
         scene: scene.path.display().to_string(),
@@ -213,12 +218,9 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
                 })
         ),
         error: failure.as_ref().map(|e| e.to_string()),
-        runout: match (&last_soil, &initial) {
-            (Some(l), Some(i)) => summary::column_runout(scene, i, l),
-            _ => None,
-        },
-        slump: match (fluid, &initial_ids) {
-            (Some(f), Some(i)) => summary::slump(scene, i, &summary::soil_by_id(f)),
+        runout: ends.as_ref().and_then(|(i, l)| summary::column_runout(scene, i, l)),
+        slump: match (&initial, &last_soil) {
+            (Some(i), Some(l)) => summary::slump(scene, i, l),
             _ => None,
         },
         geostatic: match (fluid, &initial) {
@@ -246,7 +248,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
             figures.push((format!("vehicle_{}", v.name), figures::vehicle_figure(ser, v)));
         }
     }
-    if let (Some(l), Some(i)) = (&last_soil, &initial) {
+    if let Some((i, l)) = &ends {
         let axis = summary.runout.as_ref().map(|r| r.axis);
         figures.push(("deposit_profile".into(), figures::deposit_profile(scene, i, l, axis)));
     }

@@ -227,24 +227,22 @@ pub struct PatchSummary {
     pub laid: u64,
 }
 
-/// The radius within which 99 % of the particles lie, about an axis, plus half a spacing
-/// (the extent of the outermost particles' cells). The same estimator is applied to the
-/// initial column and the deposit, so lattice effects cancel in (R∞ − R0)/R0.
-fn deposit_radius(points: impl Iterator<Item = [f64; 3]>, axis: [f64; 2], d0: f64) -> f64 {
-    let mut r: Vec<f64> = points.map(|p| ((p[0] - axis[0]).powi(2) + (p[1] - axis[1]).powi(2)).sqrt()).collect();
-    if r.is_empty() {
+/// The distance within which 99 % of `distances` lie, plus half a spacing (the extent of the
+/// outermost particles' cells). The same estimator is applied to the initial and the final
+/// soil, so lattice effects cancel in their difference.
+fn reach_99(distances: impl Iterator<Item = f64>, d0: f64) -> f64 {
+    let mut d: Vec<f64> = distances.collect();
+    if d.is_empty() {
         return 0.0;
     }
-    r.sort_by(f64::total_cmp);
-    let k = ((r.len() as f64 * 0.99).ceil() as usize).clamp(1, r.len()) - 1;
-    r[k] + 0.5 * d0
+    d.sort_by(f64::total_cmp);
+    let k = ((d.len() as f64 * 0.99).ceil() as usize).clamp(1, d.len()) - 1;
+    d[k] + 0.5 * d0
 }
 
-/// The positions of the soil particles still in the domain (water left out): what a runout
-/// or a deposit profile measures.
-pub(super) fn soil_points<T: Real>(s: &dyn SphSolver<T>) -> Vec<[f64; 3]> {
-    let (mats, ids) = (s.materials(), s.material_ids());
-    (0..s.active()).filter(|&i| !mats[ids[i] as usize].is_water()).map(|i| s.positions()[i].as_f64()).collect()
+/// The radius within which 99 % of the particles lie about an axis ([`reach_99`]).
+fn deposit_radius(points: impl Iterator<Item = [f64; 3]>, axis: [f64; 2], d0: f64) -> f64 {
+    reach_99(points.map(|p| ((p[0] - axis[0]).powi(2) + (p[1] - axis[1]).powi(2)).sqrt()), d0)
 }
 
 /// The soil particles still in the domain (water left out) by original id: what a
@@ -276,17 +274,8 @@ pub(super) fn slump(scene: &Scene, initial: &[(u32, [f64; 3])], last: &[(u32, [f
         _ => return None,
     };
     let (l0, h0, base) = (b.max[0] - b.min[0], b.max[2] - b.min[2], b.min[2]);
-    let reach = |pts: &mut dyn Iterator<Item = f64>| {
-        let mut d: Vec<f64> = pts.collect();
-        if d.is_empty() {
-            return 0.0;
-        }
-        d.sort_by(f64::total_cmp);
-        let k = ((d.len() as f64 * 0.99).ceil() as usize).clamp(1, d.len()) - 1;
-        d[k] + 0.5 * d0
-    };
-    let l0_est = reach(&mut initial.iter().map(|(_, p)| dir * (p[0] - wall_x)));
-    let lf_est = reach(&mut last.iter().map(|(_, p)| dir * (p[0] - wall_x)));
+    let l0_est = reach_99(initial.iter().map(|(_, p)| dir * (p[0] - wall_x)), d0);
+    let lf_est = reach_99(last.iter().map(|(_, p)| dir * (p[0] - wall_x)), d0);
     let lf = l0 + (lf_est - l0_est);
     let final_height = last
         .iter()
@@ -350,7 +339,8 @@ pub(super) fn slump(scene: &Scene, initial: &[(u32, [f64; 3])], last: &[(u32, [f
 fn tenth_height_reach(points: impl Iterator<Item = f64>, h0: f64, d0: f64, width: f64, bin: f64) -> f64 {
     let mut thick: Vec<f64> = Vec::new();
     for x in points {
-        if x < 0.0 {
+        // Soil behind the wall's plane, or not finite after a failed run, has no column.
+        if !(x >= 0.0 && x.is_finite()) {
             continue;
         }
         let k = (x / bin) as usize;
@@ -366,7 +356,10 @@ fn tenth_height_reach(points: impl Iterator<Item = f64>, h0: f64, d0: f64, width
     // The farthest column at or above the level (a deposit that slid off the wall may be thin
     // there and thick farther out), and the crossing towards the next one.
     match thick.iter().rposition(|t| *t >= level) {
-        Some(k) => centre(k) + (thick[k] - level) / (thick[k] - thick[k + 1]) * bin,
+        Some(k) => {
+            let next = thick.get(k + 1).copied().unwrap_or(0.0);
+            centre(k) + (thick[k] - level) / (thick[k] - next).max(f64::MIN_POSITIVE) * bin
+        }
         None => 0.0,
     }
 }
