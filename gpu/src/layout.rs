@@ -204,6 +204,43 @@ pub struct Body {
     pub count: u32,
 }
 
+/// An active region's box in the world (see `Box` in classify.wgsl; host twin
+/// `regolith_fsi::active::WorldBox`): centre and half-size `h0`, then each axis and its
+/// half-size.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ActiveBox {
+    pub center: [f32; 3],
+    pub h0: f32,
+    pub a0: [f32; 3],
+    pub h1: f32,
+    pub a1: [f32; 3],
+    pub h2: f32,
+    pub a2: [f32; 3],
+    pub pad: f32,
+}
+
+/// What the classification's `roles` kernel reads (see `Classify` in classify.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ClassifyParams {
+    pub n_boxes: u32,
+    /// Sleep speed squared (m²/s²).
+    pub v2: f32,
+    /// Travel allowance (m).
+    pub travel: f32,
+    pub pad: u32,
+}
+
+/// One axis of a cell-mask dilation (see `Dilate` in dilate.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct DilateParams {
+    pub axis: u32,
+    pub radius: u32,
+    pub pad: [u32; 2],
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -220,5 +257,8 @@ mod tests {
         assert_eq!(size_of::<Body>(), 24 * 4);
         assert_eq!(size_of::<Pore>(), 17 * 4);
         assert_eq!(size_of::<MarkerPore>(), 7 * 4);
+        assert_eq!(size_of::<ActiveBox>(), 16 * 4);
+        assert_eq!(size_of::<ClassifyParams>(), 4 * 4);
+        assert_eq!(size_of::<DilateParams>(), 4 * 4);
     }
 }

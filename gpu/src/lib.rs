@@ -16,6 +16,7 @@
 //! workspace checks them against each other.
 #![warn(missing_docs)]
 
+mod active;
 mod kernels;
 mod layout;
 mod shader;

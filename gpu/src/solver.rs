@@ -7,16 +7,17 @@ use regolith_fsi::active::ActiveDomain;
 use regolith_fsi::config::{
     DETACHED_THRESHOLD, Drag, FreeSurfaceStress, Integrator, KernelKind, SolverConfig, TimeStep,
 };
-use regolith_fsi::cpu::{ActiveRegion, Classification, GridSpec, WetSetup, lattice_sums};
+use regolith_fsi::cpu::{ActiveRegion, GridSpec, WetSetup, lattice_sums};
 use regolith_fsi::kernel::{CubicSpline, Kernel, WendlandC2};
 use regolith_fsi::math::{Sym3, Vec3};
 use regolith_fsi::rheology::{Material, PointState, Rheology, RheologyError};
 use regolith_fsi::{BodyMarkers, BodyState, MarkerInit, ParticleInit, SolverError, SphSolver, StepReport};
 
 use crate::GpuError;
+use crate::active::{ActiveParts, Shared, Sizes};
 use crate::kernels::{
-    active::Cover, advance::Advance, bodies::Bodies, dispatch, extrapolate::Extrapolate, forces::Forces, pack::Pack,
-    permute::Permute, rates::Rates, scan::Scan, sort::Sort, step_info::StepInfo, wet::Wet,
+    advance::Advance, bodies::Bodies, dispatch, extrapolate::Extrapolate, forces::Forces, pack::Pack, permute::Permute,
+    rates::Rates, scan::Scan, sort::Sort, step_info::StepInfo, wet::Wet,
 };
 use crate::layout::{self, Body, Info, Marker, MarkerPore, Packed, Params, Particle, Pore, Rate};
 use crate::shader::{Effects, bind, groups};
@@ -125,17 +126,6 @@ struct WetParts {
     water_stress: wgpu::BindGroup,
     /// The water's partial densities and masses were set from the porosity (first step).
     ready: bool,
-}
-
-/// An active region on the device (see `regolith_fsi::active`): the check after each step and
-/// the cells awake particles may be in (1 per allowed cell). The classification is made on the
-/// host by the CPU's own code ([`ActiveRegion`]), so both backends give every particle the same
-/// role; the device then sorts, searches and steps only the awake and extended particles
-/// (first in the particle buffer, extended ones flagged `FLAG_FROZEN`).
-struct ActiveParts {
-    k: Cover,
-    cells: wgpu::Buffer,
-    group: wgpu::BindGroup,
 }
 
 /// Host copy of the particles, refreshed by `sync`.
@@ -404,7 +394,7 @@ impl GpuSph {
             n_cells: n_cells as u32,
             n: n as u32,
             nm: nm as u32,
-            reach: ((2.0 * h / grid.cell - 1e-9).ceil().max(1.0)) as u32,
+            reach: regolith_fsi::cpu::reach(2.0 * h, grid.cell) as u32,
             radius2: radius * radius,
             h: h as f32,
             inv_h: (1.0 / h) as f32,
@@ -1041,37 +1031,32 @@ impl GpuSph {
         Ok(())
     }
 
-    /// Classifies the particles with the CPU's own code (from their state on the device) and
-    /// puts them in its order: awake, extended (flagged frozen), asleep, outside. The device
-    /// then sorts and steps the first `awake + extended`. CPU twin: `CpuSph::classify`.
+    /// Classifies the particles on the device (the twin of the CPU's `ActiveRegion::classify`)
+    /// and puts them in its order: awake, extended (flagged frozen), asleep, outside. The
+    /// device then sorts and steps the first `awake + extended`. Only the four counts come
+    /// back; the host copy is refreshed by the next `sync`. CPU twin: `CpuSph::classify`.
     fn classify(&mut self) -> Result<(), GpuError> {
-        let parts = self.read_particles()?;
-        let v3 = |a: [f32; 3]| Vec3::new(a[0], a[1], a[2]);
-        let pos: Vec<Vec3<f32>> = parts.iter().map(|p| v3(p.pos)).collect();
-        let vel: Vec<Vec3<f32>> = parts.iter().map(|p| v3(p.vel)).collect();
-        let Classification { order, count } = self.region.classify(&self.grid, &pos, &vel, 2.0 * self.cfg.h());
-        let near = count[0] + count[1];
-        let next: Vec<Particle> = order
-            .iter()
-            .enumerate()
-            .map(|(k, &o)| {
-                let mut p = parts[o as usize];
-                p.flags = if k < count[0] { p.flags & !layout::FLAG_FROZEN } else { p.flags | layout::FLAG_FROZEN };
-                p
-            })
-            .collect();
-        let cells: Vec<u32> = self.region.awake_cells().iter().map(|&a| u32::from(a)).collect();
-        let act = self.act.as_ref().ok_or(GpuError::Internal("active region without its kernel"))?;
-        if !cells.is_empty() {
-            self.queue.write_buffer(&act.cells, 0, bytemuck::cast_slice(&cells));
+        let act = self.act.as_ref().ok_or(GpuError::Internal("active region without its kernels"))?;
+        let n = self.n;
+        let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("classify") });
+        act.record(&self.queue, &mut enc, &self.region, n, self.n_cells);
+        if n > 0 {
+            enc.copy_buffer_to_buffer(&self.b.tmp, 0, &self.b.parts, 0, Some((n * size_of::<Particle>()) as u64));
         }
+        self.queue.submit([enc.finish()]);
+        let count: [u32; 4] = self.map(&act.counts_read, 16, |b| *bytemuck::from_bytes(b))?;
+        if count.iter().map(|&c| c as usize).sum::<usize>() != n {
+            return Err(GpuError::Internal("the classification's counts do not add up to the particles"));
+        }
+        let count = count.map(|c| c as usize);
+        self.region.note_classification();
+        let near = count[0] + count[1];
         self.live = near;
         self.awake = count[0];
         self.asleep = count[2];
         self.active = near + count[2];
         self.partitioned = true;
         self.uncovered = false;
-        self.upload(&next, near);
         Ok(())
     }
 
@@ -1245,20 +1230,18 @@ impl SphSolver<f32> for GpuSph {
         self.region.set(domain, self.n_bodies, self.wet.is_some()).map_err(SolverError::Setup)?;
         if self.region.domain().is_some() && self.act.is_none() {
             let dev = |e: GpuError| SolverError::Setup(format!("wgpu: {e}"));
-            let k = Cover::new(&self.device, &self.effects).map_err(dev)?;
-            let cells = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("active.cells"),
-                size: (self.n_cells.max(1) * 4).next_multiple_of(16) as u64,
-                usage: USAGE,
-                mapped_at_creation: false,
-            });
-            let group = bind(
+            let shared = Shared { params: &self.b.params, parts: &self.b.parts, tmp: &self.b.tmp, info: &self.b.info };
+            let reach = regolith_fsi::cpu::reach(2.0 * self.cfg.h(), self.grid.cell) as u32;
+            let act = ActiveParts::new(
                 &self.device,
-                "cover",
-                &k.layout,
-                &[(0, &self.b.params), (1, &self.b.parts), (2, &cells), (3, &self.b.info)],
-            );
-            self.act = Some(ActiveParts { k, cells, group });
+                &self.queue,
+                &self.effects,
+                &shared,
+                &Sizes { cells: self.n_cells, capacity: self.capacity, boxes: self.n_bodies, reach },
+            )
+            .map_err(dev)?;
+            self.act = Some(act);
+            self.variants.push("classify".into());
             self.variants.push("cover".into());
         }
         Ok(())

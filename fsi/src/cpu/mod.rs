@@ -24,6 +24,7 @@ mod wet;
 
 pub use grid::GridSpec;
 pub use memory::MemoryUse;
+pub use neighbors::reach;
 pub use region::{ActiveRegion, Classification};
 pub use wet::{DELTA_SPH, WetSetup};
 

@@ -34,6 +34,11 @@ pub struct Classification {
 }
 
 impl ActiveRegion {
+    /// Cells past those awake particles held at a classification that they may drift into
+    /// before the next one (on every side). The slack keeps the boundary particles' jitter
+    /// across cell faces from forcing a classification every few steps.
+    pub const SLACK: usize = 1;
+
     /// Keeps `domain` from now on (`None`: the whole domain is awake). Checks the settings and
     /// that there is one box per FSI body (`bodies`); errors name what is wrong.
     pub fn set(&mut self, domain: Option<ActiveDomain>, bodies: usize, wet: bool) -> Result<(), String> {
@@ -91,6 +96,19 @@ impl ActiveRegion {
     /// Forgets the last classification (the next partitioned step makes one).
     pub fn forget(&mut self) {
         self.classified = None;
+    }
+
+    /// The boxes where the bodies are now (owner order; empty before `place`).
+    pub fn boxes(&self) -> &[WorldBox] {
+        &self.boxes_now
+    }
+
+    /// Records a classification made by a device's twin of [`Self::classify`] with the boxes
+    /// where they are now: the next one is due when they have moved the travel allowance from
+    /// here. (`awake_cells` is then the device's, not kept here.)
+    pub fn note_classification(&mut self) {
+        self.classified = Some(self.boxes_now.clone());
+        self.classifications += 1;
     }
 
     /// Cells awake particles may be in until the next classification (linear cell index).
@@ -193,11 +211,10 @@ fn roles<T: Real>(
             held[c as usize] = true;
         }
     }
-    // Awake particles may drift one cell past the cells they held before the classification
-    // must be redone; the extended band reaches the search reach past that, so every awake
-    // particle's neighbours stay awake or extended meanwhile. The slack keeps the boundary
-    // particles' jitter across cell faces from forcing a classification every few steps.
-    const SLACK: usize = 1;
+    // Awake particles may drift `SLACK` cells past the cells they held before the
+    // classification must be redone; the extended band reaches the search reach past that, so
+    // every awake particle's neighbours stay awake or extended meanwhile.
+    const SLACK: usize = ActiveRegion::SLACK;
     let reach = neighbors::reach(radius, grid.cell);
     *awake_cells = dilate(&held, dims, SLACK);
     let near = dilate(&held, dims, SLACK + reach);
