@@ -13,8 +13,8 @@
 use regolith_fsi::cpu::ActiveRegion;
 
 use crate::GpuError;
-use crate::kernels::{active::Cover, classify::Classify, dispatch, scan::Scan};
-use crate::layout::{ActiveBox, ClassifyParams, DilateParams};
+use crate::kernels::{active::Cover, classify::Classify, dilate::Dilate, dispatch, scan::Scan};
+use crate::layout::{ActiveBox, ClassifyParams};
 use crate::shader::{Effects, bind, groups};
 
 /// The buffers a classification and the per-step check share with the solver.
@@ -43,6 +43,7 @@ pub(crate) struct ActiveParts {
     /// be in until the next classification (1 per cell; `record` writes them).
     pub group: wgpu::BindGroup,
     c: Classify,
+    d: Dilate,
     scan: Scan,
     params: wgpu::Buffer,
     boxes: wgpu::Buffer,
@@ -83,6 +84,7 @@ impl ActiveParts {
         let uniform = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST;
         let k = Cover::new(device, e)?;
         let c = Classify::new(device, e)?;
+        let d = Dilate::new(device, e)?;
         let len = 3 * capacity.max(1);
         let scan = Scan::new(device, e, len as u32)?;
         let cells = mk("active.cells", n_cells, USAGE);
@@ -127,14 +129,7 @@ impl ActiveParts {
             (1, reach, &ping, &pong),
             (2, reach, &pong, &near),
         ];
-        let dilations = steps
-            .iter()
-            .map(|&(axis, radius, src, dst)| {
-                let u = mk("active.dilate", size_of::<DilateParams>() / 4, uniform);
-                queue.write_buffer(&u, 0, bytemuck::bytes_of(&DilateParams { axis, radius, pad: [0; 2] }));
-                bind(device, "dilate", &c.dilate_layout, &[(0, s.params), (1, &u), (2, src), (3, dst)])
-            })
-            .collect();
+        let dilations = d.chain(device, queue, s.params, &steps);
         let scan_group = bind(device, "scan", &scan.layout, &[(0, s.params), (1, &keys), (2, &kstart), (3, &sums)]);
         let partition = bind(
             device,
@@ -146,6 +141,7 @@ impl ActiveParts {
             k,
             group,
             c,
+            d,
             scan,
             params,
             boxes,
@@ -202,7 +198,7 @@ impl ActiveParts {
         enc.clear_buffer(&self.keys, 0, None);
         dispatch(enc, &self.c.roles, &self.roles, groups(n));
         for g in &self.dilations {
-            dispatch(enc, &self.c.dilate, g, groups(n_cells));
+            dispatch(enc, &self.d.dilate, g, groups(n_cells));
         }
         dispatch(enc, &self.c.mark, &self.roles, groups(n));
         self.scan.record(enc, &self.scan_group);

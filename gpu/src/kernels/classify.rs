@@ -1,6 +1,6 @@
 //! The active region's classification on the device: `roles` and `mark` (`classify.wgsl`),
-//! `dilate` (`dilate.wgsl`), `place` and `tally` (`partition.wgsl`); the scan between them is
-//! [`super::scan::Scan`]. CPU twin: `regolith_fsi::cpu::ActiveRegion::classify`.
+//! `place` and `tally` (`partition.wgsl`); the dilations between them are
+//! [`super::dilate::Dilate`], the scan [`super::scan::Scan`]. CPU twin: `regolith_fsi::cpu::ActiveRegion::classify`.
 
 use crate::GpuError;
 use crate::shader::{Bind, Effects, Variant, layout, pipelines, source};
@@ -9,8 +9,6 @@ pub(crate) struct Classify {
     pub roles_layout: wgpu::BindGroupLayout,
     pub roles: wgpu::ComputePipeline,
     pub mark: wgpu::ComputePipeline,
-    pub dilate_layout: wgpu::BindGroupLayout,
-    pub dilate: wgpu::ComputePipeline,
     pub partition_layout: wgpu::BindGroupLayout,
     pub place: wgpu::ComputePipeline,
     pub tally: wgpu::ComputePipeline,
@@ -40,11 +38,6 @@ impl Classify {
         let (Some(roles), Some(mark)) = (p.next(), p.next()) else {
             return Err(GpuError::Internal("classify pipelines"));
         };
-        let dilate_layout = layout(device, "dilate", &[(0, Uniform), (1, Uniform), (2, Read), (3, ReadWrite)]);
-        let src = source(e, &v, include_str!("dilate.wgsl"), false);
-        let dilate = pipelines(device, "dilate", &src, &dilate_layout, &["dilate"])?
-            .pop()
-            .ok_or(GpuError::Internal("dilate pipeline"))?;
         let partition_layout = layout(
             device,
             "partition",
@@ -55,6 +48,6 @@ impl Classify {
         let (Some(place), Some(tally)) = (p.next(), p.next()) else {
             return Err(GpuError::Internal("partition pipelines"));
         };
-        Ok(Self { roles_layout, roles, mark, dilate_layout, dilate, partition_layout, place, tally })
+        Ok(Self { roles_layout, roles, mark, partition_layout, place, tally })
     }
 }

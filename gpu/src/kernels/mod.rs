@@ -6,6 +6,7 @@ pub(crate) mod active;
 pub(crate) mod advance;
 pub(crate) mod bodies;
 pub(crate) mod classify;
+pub(crate) mod dilate;
 pub(crate) mod extrapolate;
 pub(crate) mod forces;
 pub(crate) mod pack;
