@@ -406,16 +406,42 @@ fn bench_flags_that_do_not_apply_to_the_scene_are_one_line_errors() {
         &["bench", "--scene", "column", "--patch", "3"],
         "applies to --scene wheel-long or rover-patch",
     );
-    assert_one_line_error(&["bench", "--scene", "rover-patch", "--backend", "wgpu"], "--backend: rover-patch runs on");
-    assert_one_line_error(
-        &["bench", "--scene", "wheel-long", "--backend", "wgpu", "--patch", "3"],
-        "--patch: the moving patch runs on the CPU backend only",
-    );
+    assert_one_line_error(&["bench", "--scene", "rover-patch", "--backend", "wgpu"], "--backend: rover-patch times");
     assert_one_line_error(&["bench", "--scene", "wheel-long", "--precision", "f64"], "--precision: wheel-long");
     assert_one_line_error(
         &["bench", "--scene", "wheel-long", "--backend", "wgpu", "--skin", "0.3"],
         "--skin: the wgpu backend rebuilds",
     );
+}
+
+/// The wheel-long bench with `--patch` times the patch alone and with the active region inside
+/// it, after the whole bed without and with it, and runs on wgpu too (the moving patch and the
+/// active region have device twins): one exchange each on a 3 m bed, the same wheel force in
+/// every run (the wheel has met no laid soil yet).
+#[test]
+fn the_wheel_long_bench_times_a_patch_with_and_without_the_active_region_on_wgpu() {
+    let args = [
+        "bench",
+        "--scene",
+        "wheel-long",
+        "--backend",
+        "wgpu",
+        "--length",
+        "3",
+        "--patch",
+        "2.5",
+        "--steps",
+        "1",
+        "--warmup",
+        "0",
+    ];
+    let (code, stdout, err) = regolith(&args);
+    assert_eq!(code, 0, "{err}");
+    let runs: Vec<&str> = stdout.lines().filter(|l| l.starts_with("bench wheel-long wgpu")).collect();
+    assert_eq!(runs.len(), 4, "the whole bed and the patch, each without and with the active region: {stdout}");
+    assert!(runs[2].contains("active off patch 2.5 m") && runs[3].contains("active on  patch 2.5 m"), "{stdout}");
+    let force = |l: &str| l.split("wheel force").nth(1).and_then(|f| f.split(" (").next()).map(str::to_string);
+    assert!(runs.iter().all(|r| force(r) == force(runs[0]) && force(r).is_some()), "same wheel force: {stdout}");
 }
 
 /// The rover-patch bench runs the example rover on the whole bed and on a patch, in one run:

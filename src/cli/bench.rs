@@ -115,8 +115,6 @@ fn on_backend(scene: &mut scene::Scene, backend: BackendArg, skin: Option<f64>) 
     Ok(())
 }
 
-/// `regolith bench --scene wheel-long`: timed exchanges of the wheel on the long bed, with and
-/// without the active region; `steps` and `warmup` count exchanges (1 ms each).
 /// What `--scene wheel-long` runs: the active region, the backend, the bed and patch length.
 pub(super) struct WheelLong {
     pub active: ActiveArg,
@@ -125,6 +123,9 @@ pub(super) struct WheelLong {
     pub patch: Option<f64>,
 }
 
+/// `regolith bench --scene wheel-long`: timed exchanges of the wheel on the long bed, with and
+/// without the active region, and on a moving patch with and without it (`--patch`); `steps`
+/// and `warmup` count exchanges (1 ms each).
 pub(super) fn wheel_long(
     WheelLong { active, backend, length, patch }: WheelLong,
     skin: &[f64],
@@ -139,8 +140,13 @@ pub(super) fn wheel_long(
         ActiveArg::Off => vec![(false, None)],
         ActiveArg::Both => vec![(false, None), (true, None)],
     };
+    // A patch alone, and (unless `--active off`) a patch with the active region inside it: what
+    // a long traverse would use.
     if patch.is_some() {
         modes.push((false, patch));
+        if !matches!(active, ActiveArg::Off) {
+            modes.push((true, patch));
+        }
     }
     let skins = skins(skin)?;
     let mut results = Vec::new();

@@ -705,9 +705,9 @@ pub enum Command {
         /// wheel-long and rover-patch only: bed length (m; default 10 and 20).
         #[arg(long, value_name = "M")]
         length: Option<f64>,
-        /// wheel-long: also time the wheel on a moving patch of this length (m) with the
-        /// active region off, against the whole bed; rover-patch: the patch's length (default
-        /// 3 m).
+        /// wheel-long: also time the wheel on a moving patch of this length (m), without the
+        /// active region and (unless `--active off`) with it, against the whole bed;
+        /// rover-patch: the patch's length (default 3 m).
         #[arg(long, value_name = "M")]
         patch: Option<f64>,
         /// Verlet skins of the neighbour lists to time, multiples of h, comma-separated (e.g.
@@ -781,20 +781,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             Err(InputError::flag("--precision", "wheel-long and rover-patch run in f32 only".to_string()).into())
         }
         Command::Bench { scene: BenchSceneArg::RoverPatch, backend, .. } if backend != BackendArg::Cpu => {
-            Err(InputError::flag(
-                "--backend",
-                "rover-patch runs on the CPU backend only (the moving patch has no wgpu twin yet)".to_string(),
-            )
-            .into())
-        }
-        Command::Bench { scene: BenchSceneArg::WheelLong, backend, patch: Some(_), .. }
-            if backend != BackendArg::Cpu =>
-        {
-            Err(InputError::flag(
-                "--patch",
-                "the moving patch runs on the CPU backend only: use --backend cpu".to_string(),
-            )
-            .into())
+            Err(InputError::flag("--backend", "rover-patch times the CPU backend only: use --backend cpu".to_string())
+                .into())
         }
         Command::Bench { scene: BenchSceneArg::WheelLong, particles, model, .. }
             if particles.is_some() || model.is_some() =>
