@@ -62,9 +62,9 @@ const USAGE: wgpu::BufferUsages =
     wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_DST).union(wgpu::BufferUsages::COPY_SRC);
 
 impl ActiveParts {
-    /// Kernels and buffers for `size`. The classification's per-particle
-    /// arrays (20 bytes per particle) are smaller than the particle records (80), so they fit
-    /// any device the records fit.
+    /// Kernels and buffers for `size`: 32 bytes per particle of capacity (role, cell, three
+    /// keys and their scan) and 20 per grid cell. No buffer holds more than 12 bytes per
+    /// particle, against the records' 80, so any device the records fit takes them.
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
