@@ -1,8 +1,8 @@
 // Active regions (see `regolith_fsi::active`): `cover` checks, after a step, that every awake
 // particle is still in a cell awake particles may be in (those they held at the last
 // classification and one more on every side); when one is not, or has left the grid,
-// `info.uncovered` is set and the host classifies again before the next step. The
-// classification itself is the CPU's (`regolith_fsi::cpu::ActiveRegion`), made on the host.
+// `info.uncovered` is set and the device classifies again before the next step
+// (classify.wgsl, dilate.wgsl, partition.wgsl; CPU twin `regolith_fsi::cpu::ActiveRegion`).
 // CPU twin: `CpuSph::awake_still_covered`.
 
 @group(0) @binding(0) var<uniform> prm: Params;
