@@ -15,7 +15,7 @@ use regolith_fsi::cpu::ActiveRegion;
 use crate::GpuError;
 use crate::kernels::{active::Cover, classify::Classify, dilate::Dilate, dispatch, scan::Scan};
 use crate::layout::{ActiveBox, ClassifyParams};
-use crate::shader::{Effects, bind, groups};
+use crate::shader::{Effects, USAGE, bind, buffer, groups};
 
 /// The buffers a classification and the per-step check share with the solver.
 pub(crate) struct Shared<'a> {
@@ -58,9 +58,6 @@ pub(crate) struct ActiveParts {
     partition: wgpu::BindGroup,
 }
 
-const USAGE: wgpu::BufferUsages =
-    wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_DST).union(wgpu::BufferUsages::COPY_SRC);
-
 impl ActiveParts {
     /// Kernels and buffers for `size`: 32 bytes per particle of capacity (role, cell, three
     /// keys and their scan) and 20 per grid cell. No buffer holds more than 12 bytes per
@@ -73,14 +70,7 @@ impl ActiveParts {
         size: &Sizes,
     ) -> Result<Self, GpuError> {
         let Sizes { cells: n_cells, capacity, boxes: n_boxes, reach } = *size;
-        let mk = |label: &str, words: usize, usage: wgpu::BufferUsages| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: (words.max(1) * 4).next_multiple_of(16) as u64,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
+        let mk = |label: &str, words: usize, usage: wgpu::BufferUsages| buffer(device, label, 4 * words as u64, usage);
         let uniform = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST;
         let k = Cover::new(device, e)?;
         let c = Classify::new(device, e)?;
@@ -195,7 +185,12 @@ impl ActiveParts {
         let p = ClassifyParams { n_boxes: boxes.len() as u32, v2, travel, pad: 0 };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         enc.clear_buffer(&self.held, 0, None);
-        enc.clear_buffer(&self.keys, 0, None);
+        // The three segments of `n` keys: every place and count is a sum over them alone, so
+        // the keys past them (an earlier classification's, when there were more particles)
+        // need no clearing.
+        if n > 0 {
+            enc.clear_buffer(&self.keys, 0, Some(12 * n as u64));
+        }
         dispatch(enc, &self.c.roles, &self.roles, groups(n));
         for g in &self.dilations {
             dispatch(enc, &self.d.dilate, g, groups(n_cells));

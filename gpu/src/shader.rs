@@ -207,6 +207,20 @@ pub(crate) fn pipelines(
     }
 }
 
+/// Storage a kernel reads or writes and the host copies to or from.
+pub(crate) const USAGE: wgpu::BufferUsages =
+    wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_DST).union(wgpu::BufferUsages::COPY_SRC);
+
+/// A buffer of at least `bytes` (16 at least, a whole number of words).
+pub(crate) fn buffer(device: &wgpu::Device, label: &str, bytes: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(16).next_multiple_of(4),
+        usage,
+        mapped_at_creation: false,
+    })
+}
+
 /// Workgroups of 64 covering `n` items.
 pub(crate) fn groups(n: usize) -> u32 {
     (n.div_ceil(64)).max(1) as u32

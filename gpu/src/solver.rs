@@ -20,7 +20,7 @@ use crate::kernels::{
     rates::Rates, scan::Scan, sort::Sort, step_info::StepInfo, wet::Wet,
 };
 use crate::layout::{self, Body, Info, Marker, MarkerPore, Packed, Params, Particle, Pore, Rate};
-use crate::shader::{Effects, bind, groups};
+use crate::shader::{Effects, USAGE, bind, buffer, groups};
 
 impl Effects {
     /// The effects of a solver configuration and its materials.
@@ -206,9 +206,6 @@ pub struct GpuSph {
     /// Some awake particle left the cells it may be in during the last step.
     uncovered: bool,
 }
-
-const USAGE: wgpu::BufferUsages =
-    wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_DST).union(wgpu::BufferUsages::COPY_SRC);
 
 fn gpu_material(m: &Material<f32>) -> layout::Material {
     let mut g = layout::Material {
@@ -473,14 +470,7 @@ impl GpuSph {
         }
         let n_bodies = markers.iter().map(|m| m.owner as usize).max().unwrap_or(0);
 
-        let mk = |label: &str, bytes: u64, usage: wgpu::BufferUsages| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes.max(16).next_multiple_of(4),
-                usage,
-                mapped_at_creation: false,
-            })
-        };
+        let mk = |label: &str, bytes: u64, usage: wgpu::BufferUsages| buffer(device, label, bytes, usage);
         let read = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
         let b = Buffers {
             params: mk(

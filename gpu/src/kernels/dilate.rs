@@ -2,7 +2,7 @@
 
 use crate::GpuError;
 use crate::layout::DilateParams;
-use crate::shader::{Bind, Effects, Variant, bind, layout, pipelines, source};
+use crate::shader::{Bind, Effects, Variant, bind, buffer, layout, pipelines, source};
 
 /// One pass of a chain: the axis, the radius in cells, the mask read and the mask written.
 pub(crate) type Pass<'a> = (u32, u32, &'a wgpu::Buffer, &'a wgpu::Buffer);
@@ -34,12 +34,8 @@ impl Dilate {
         passes
             .iter()
             .map(|&(axis, radius, src, dst)| {
-                let u = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("dilate.params"),
-                    size: size_of::<DilateParams>() as u64,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
+                let usage = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST;
+                let u = buffer(device, "dilate.params", size_of::<DilateParams>() as u64, usage);
                 queue.write_buffer(&u, 0, bytemuck::bytes_of(&DilateParams { axis, radius, pad: [0; 2] }));
                 bind(device, "dilate", &self.layout, &[(0, params), (1, &u), (2, src), (3, dst)])
             })
