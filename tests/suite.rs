@@ -50,8 +50,12 @@ mod repose;
 mod rig_calibration;
 #[path = "scene_errors.rs"]
 mod scene_errors;
+#[path = "traction.rs"]
+mod traction;
 #[path = "triaxial.rs"]
 mod triaxial;
+#[path = "urdf_gallery.rs"]
+mod urdf_gallery;
 #[path = "vehicles.rs"]
 mod vehicles;
 #[path = "verlet.rs"]

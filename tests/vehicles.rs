@@ -32,39 +32,62 @@ fn extent(shape: &ShapeDesc) -> [f64; 3] {
 #[test]
 fn the_example_rover_imports_links_joints_masses_and_inertias() {
     let m = rover();
+    // The mast and camera hang on fixed joints: lumped into the chassis, kept as frames.
     let names: Vec<&str> = m.links.iter().map(|l| l.name.as_str()).collect();
-    assert_eq!(names, ["base_link", "mast", "camera", "wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr"]);
+    assert_eq!(names, ["base_link", "wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr"]);
+    let frames: Vec<(&str, &str, usize)> =
+        m.frames.iter().map(|f| (f.name.as_str(), f.joint.as_str(), f.link)).collect();
+    assert_eq!(frames, [("mast", "mast_joint", 0), ("camera", "camera_joint", 0)]);
+    assert_eq!(m.frames[1].pose.translation, [0.12, 0.0, 0.26]);
     assert_eq!(m.root, 0);
     assert!((m.mass() - 8.5).abs() < 1e-12);
-    let kinds: Vec<JointType> = m.joints.iter().map(|j| j.kind).collect();
-    assert_eq!(kinds[..2], [JointType::Fixed, JointType::Fixed]);
-    assert!(kinds[2..].iter().all(|k| *k == JointType::Continuous));
-    assert!(m.unsupported.is_empty(), "{:?}", m.unsupported);
+    assert!(m.joints.iter().all(|j| j.kind == JointType::Continuous) && m.joints.len() == 4);
+    assert!(m.unsupported.is_empty() && m.substitutions.is_empty(), "{:?}", m.unsupported);
     // Wheel: m = 0.5 kg, r = 0.07 m, h = 0.06 m; axle along the link's y.
-    let w = &m.links[3];
+    let w = &m.links[1];
     let (ia, iy) = (0.5 * (3.0 * 0.07 * 0.07 + 0.06 * 0.06) / 12.0, 0.5 * 0.07 * 0.07 / 2.0);
     for (got, want) in w.inertia.iter().zip([ia, iy, ia, 0.0, 0.0, 0.0]) {
         assert!((got - want).abs() < 1e-6 * ia, "wheel inertia {:?}", w.inertia);
     }
-    // Mast: inertial at 0.1 m above its frame.
-    assert_eq!(m.links[1].com, [0.0, 0.0, 0.1]);
-    assert_eq!(m.wheel_links(), vec![3, 4, 5, 6]);
-    // Chassis mesh from package://, camera head from a COLLADA file in centimetres.
-    let chassis = extent(&m.links[0].collision[0].1);
+    // Chassis (6 kg at its origin) + mast (0.3 kg, centre 0.1 m above its frame at (0.12, 0,
+    // 0.04)) + camera (0.2 kg at (0.12, 0, 0.26)): one 6.5 kg body, by the parallel-axis theorem.
+    let base = &m.links[0];
+    let parts = [(6.0, [0.0, 0.0, 0.0]), (0.3, [0.12, 0.0, 0.14]), (0.2, [0.12, 0.0, 0.26])];
+    let own = [[0.037, 0.0832, 0.1138], [0.001023, 0.001023, 0.000045], [0.000133, 0.0000683, 0.000148]];
+    let com = [0, 1, 2].map(|k| parts.iter().map(|(m, c)| m * c[k]).sum::<f64>() / 6.5);
+    let d = |i: usize, k: usize| parts[i].1[k] - com[k];
+    let ixx: f64 = (0..3).map(|i| own[i][0] + parts[i].0 * (d(i, 1).powi(2) + d(i, 2).powi(2))).sum();
+    let iyy: f64 = (0..3).map(|i| own[i][1] + parts[i].0 * (d(i, 0).powi(2) + d(i, 2).powi(2))).sum();
+    let izz: f64 = (0..3).map(|i| own[i][2] + parts[i].0 * (d(i, 0).powi(2) + d(i, 1).powi(2))).sum();
+    let ixz: f64 = (0..3).map(|i| -parts[i].0 * d(i, 0) * d(i, 2)).sum();
+    assert!((base.mass - 6.5).abs() < 1e-12);
+    assert!(base.com.iter().zip(com).all(|(a, b)| (a - b).abs() < 1e-15), "com {:?} vs {com:?}", base.com);
+    for (got, want) in base.inertia.iter().zip([ixx, iyy, izz, 0.0, ixz, 0.0]) {
+        assert!((got - want).abs() < 1e-12, "chassis inertia {:?} vs {:?}", base.inertia, [ixx, iyy, izz, ixz]);
+    }
+    assert!(ixz < -1e-3, "the mast and camera sit forward and up: Ixz = {ixz}");
+    assert_eq!(m.wheel_links(), vec![1, 2, 3, 4]);
+    // Chassis mesh from package://, then the mast box and the camera head (a COLLADA file in
+    // centimetres) at their frames' poses.
+    assert_eq!((base.collision.len(), base.visual.len()), (3, 3));
+    let chassis = extent(&base.collision[0].1);
     for (g, w) in chassis.iter().zip([0.40, 0.26, 0.08]) {
         assert!((g - w).abs() < 1e-6, "chassis {chassis:?}");
     }
-    let head = extent(&m.links[2].visual[0].1);
+    assert_eq!(base.collision[1].0.translation, [0.12, 0.0, 0.14]);
+    let head = extent(&base.visual[2].1);
     for (g, w) in head.iter().zip([0.05, 0.08, 0.04]) {
         assert!((g - w).abs() < 1e-9, "camera head {head:?} (the dae unit is cm)");
     }
+    assert_eq!(base.visual[2].0.translation, [0.12, 0.0, 0.26]);
     // Forward kinematics with all joints at zero.
     let poses = m.link_poses(&regolith_rigid::Pose::from_rpy_deg([1.0, 2.0, 0.5], [0.0, 0.0, 90.0]));
-    let fl = poses[3].translation;
+    let fl = poses[1].translation;
     for (g, w) in fl.iter().zip([1.0 - 0.17, 2.0 + 0.15, 0.47]) {
         assert!((g - w).abs() < 1e-12, "wheel_fl at {fl:?}");
     }
-    let cam = poses[2].translation;
+    let (li, at) = m.locate("camera").expect("camera frame");
+    let cam = poses[li].compose(&at).translation;
     assert!((cam[2] - (0.5 + 0.04 + 0.22)).abs() < 1e-12 && (cam[1] - 2.12).abs() < 1e-12, "camera at {cam:?}");
 }
 
@@ -114,6 +137,47 @@ fn wrong_urdfs_are_errors_naming_the_link_and_the_uri() {
         &[],
     );
     assert!(e.contains("joint `j`: parent link `ghost` is not defined"), "{e}");
+    // Massless links may only hang on fixed joints.
+    let e = urdf_err(
+        "massless_wheel",
+        &format!(
+            "<robot name=\"r\"><link name=\"a\">{INERTIAL}</link><link name=\"wheel\"/>\
+             <joint name=\"spin\" type=\"continuous\"><parent link=\"a\"/><child link=\"wheel\"/><axis xyz=\"0 1 0\"/></joint></robot>"
+        ),
+        &[],
+    );
+    assert!(e.contains("link `wheel` has no <inertial> or a zero mass but moves on joint `spin` (continuous)"), "{e}");
+    assert!(e.contains("only links on fixed joints may be massless"), "{e}");
+    let e = urdf_err(
+        "massless_root",
+        "<robot name=\"r\"><link name=\"footprint\"/><link name=\"imu\"/>\
+         <joint name=\"j\" type=\"fixed\"><parent link=\"footprint\"/><child link=\"imu\"/></joint></robot>",
+        &[],
+    );
+    assert!(
+        e.contains(
+            "link `footprint` has no <inertial> or a zero mass (nor do the links fixed to it: imu) but is the root"
+        ),
+        "{e}"
+    );
+    let e = urdf_err("negative_mass", &one_link("<box size=\"1 1 1\"/>").replace("value=\"1\"", "value=\"-1\""), &[]);
+    assert!(e.contains("link `body`: <mass> must be finite and ≥ 0 kg (got -1)"), "{e}");
+    // xacro: only $(optenv) and $(env) are resolved; the rest points at the xacro tool.
+    let e = urdf_err("xacro_find", &one_link("<mesh filename=\"$(find rover_description)/meshes/chassis.stl\"/>"), &[]);
+    assert!(
+        e.contains(": line 1: `$(find rover_description)` is a xacro substitution") && e.contains("`xacro`"),
+        "{e}"
+    );
+    let e = urdf_err(
+        "xacro_element",
+        "<robot name=\"r\" xmlns:xacro=\"http://ros.org/wiki/xacro\">\n<xacro:property name=\"w\" value=\"1\"/>\n</robot>",
+        &[],
+    );
+    assert!(e.contains(": line 2: element <xacro:property> is xacro") && e.contains("xacro robot.urdf.xacro"), "{e}");
+    let e = urdf_err("xacro_expression", &one_link("<box size=\"${w} 1 1\"/>"), &[]);
+    assert!(e.contains("`${w}` is a xacro expression"), "{e}");
+    let e = urdf_err("env_unset", &one_link("<box size=\"$(env REGOLITH_TEST_SURELY_UNSET) 1 1\"/>"), &[]);
+    assert!(e.contains("environment variable REGOLITH_TEST_SURELY_UNSET is not set"), "{e}");
 }
 
 #[test]
@@ -313,20 +377,38 @@ fn on_rigid_ground_the_imported_rover_behaves_as_in_plain_rapier() {
         let c = robot.links.iter().position(|l| l.name == j.child.link).expect("child");
         link_pose[c] = link_pose[p] * urdf_pose(&j.origin);
     }
-    let mut handles = Vec::new();
+    // Fixed joints lumped by hand, as Gazebo does: a link on a fixed joint puts its colliders
+    // and its mass (on a massive sensor collider) on its parent's body, and rapier combines the
+    // mass properties itself — an independent check of the importer's parallel-axis sums.
+    let mut owner: Vec<usize> = (0..robot.links.len()).collect();
+    let mut rel = vec![Pose::IDENTITY; robot.links.len()];
+    for j in robot.joints.iter().filter(|j| j.joint_type == urdf_rs::JointType::Fixed) {
+        let p = robot.links.iter().position(|l| l.name == j.parent.link).expect("parent");
+        let c = robot.links.iter().position(|l| l.name == j.child.link).expect("child");
+        owner[c] = owner[p];
+        rel[c] = rel[p] * urdf_pose(&j.origin);
+    }
+    let mut handles: Vec<RigidBodyHandle> = Vec::new();
     for (i, l) in robot.links.iter().enumerate() {
-        let h = world.bodies.insert(RigidBodyBuilder::dynamic().pose(link_pose[i]).can_sleep(false));
         let i_ = &l.inertial.inertia;
         let m = Matrix::from_cols_array(
             &[i_.ixx, i_.ixy, i_.ixz, i_.ixy, i_.iyy, i_.iyz, i_.ixz, i_.iyz, i_.izz].map(|x| x as f32),
         );
         let com = l.inertial.origin.xyz.0.map(|x| x as f32);
-        world.bodies[h].set_additional_mass_properties(
-            MassProperties::with_inertia_matrix(Vector::new(com[0], com[1], com[2]), l.inertial.mass.value as f32, m),
-            true,
-        );
+        let mass =
+            MassProperties::with_inertia_matrix(Vector::new(com[0], com[1], com[2]), l.inertial.mass.value as f32, m);
+        let h = if owner[i] == i {
+            let h = world.bodies.insert(RigidBodyBuilder::dynamic().pose(link_pose[i]).can_sleep(false));
+            world.bodies[h].set_additional_mass_properties(mass, true);
+            h
+        } else {
+            let h = handles[owner[i]];
+            let carrier = ColliderBuilder::ball(1e-3).sensor(true).position(rel[i]).mass_properties(mass);
+            world.colliders.insert_with_parent(carrier, h, &mut world.bodies);
+            h
+        };
         for c in &l.collision {
-            let at = urdf_pose(&c.origin);
+            let at = rel[i] * urdf_pose(&c.origin);
             let (shape, at) = match &c.geometry {
                 urdf_rs::Geometry::Box { size } => {
                     let s = size.0.map(|x| 0.5 * x as f32);
@@ -350,30 +432,20 @@ fn on_rigid_ground_the_imported_rover_behaves_as_in_plain_rapier() {
         }
         handles.push(h);
     }
-    for j in &robot.joints {
+    for j in robot.joints.iter().filter(|j| j.joint_type != urdf_rs::JointType::Fixed) {
         let p = robot.links.iter().position(|l| l.name == j.parent.link).expect("parent");
         let c = robot.links.iter().position(|l| l.name == j.child.link).expect("child");
-        let frame1 = urdf_pose(&j.origin);
-        let joint: GenericJoint = match j.joint_type {
-            urdf_rs::JointType::Fixed => FixedJointBuilder::new()
-                .local_frame1(frame1)
-                .local_frame2(Pose::IDENTITY)
-                .contacts_enabled(false)
-                .build()
-                .into(),
-            _ => {
-                let a = j.axis.xyz.0.map(|x| x as f32);
-                RevoluteJointBuilder::new(Vector::new(a[0], a[1], a[2]))
-                    .local_anchor1(frame1.translation)
-                    .local_anchor2(Vector::ZERO)
-                    .motor_velocity(3.0, regolith_rigid::MOTOR_GAIN)
-                    .motor_max_force(6.0)
-                    .contacts_enabled(false)
-                    .build()
-                    .into()
-            }
-        };
-        world.impulse_joints.insert(handles[p], handles[c], joint, true);
+        let frame1 = rel[p] * urdf_pose(&j.origin);
+        let a = j.axis.xyz.0.map(|x| x as f32);
+        let joint: GenericJoint = RevoluteJointBuilder::new(Vector::new(a[0], a[1], a[2]))
+            .local_anchor1(frame1.translation)
+            .local_anchor2(Vector::ZERO)
+            .motor_velocity(3.0, regolith_rigid::MOTOR_GAIN)
+            .motor_max_force(6.0)
+            .contacts_enabled(false)
+            .build()
+            .into();
+        world.impulse_joints.insert(handles[owner[p]], handles[c], joint, true);
     }
     let dt = 1e-3;
     world.integration_parameters.dt = dt as f32;
@@ -438,7 +510,7 @@ fn vehicle_scene_mistakes_are_one_line_errors() {
                 urdf.display(),
                 examples().display()
             ),
-            "joint `mast_joint` is not a wheel joint",
+            "key `vehicles[0].drive.joints`: joint `mast_joint` is fixed: link `mast` is lumped into `base_link`",
         ),
         (
             format!(
@@ -479,24 +551,16 @@ fn a_vehicle_run_records_every_link_and_its_wheels() {
     let tf = &topics["/tf"][0].1["transforms"];
     let children: Vec<&str> =
         tf.as_array().expect("list").iter().map(|t| t["child_frame_id"].as_str().expect("id")).collect();
-    assert_eq!(
-        children,
-        [
-            "rover/base_link",
-            "rover/mast",
-            "rover/camera",
-            "rover/wheel_fl",
-            "rover/wheel_fr",
-            "rover/wheel_rl",
-            "rover/wheel_rr"
-        ]
-    );
+    assert_eq!(children, ["rover/base_link", "rover/wheel_fl", "rover/wheel_fr", "rover/wheel_rl", "rover/wheel_rr"]);
     // Shapes: the URDF's visual geometry — the STL chassis and the COLLADA camera head as
-    // triangle lists, the wheels as cylinders.
+    // triangle lists and the mast as a cube, all on the chassis they are lumped into; the
+    // wheels as cylinders.
     let ents = topics["/bodies/shapes"][0].1["entities"].as_array().expect("entities").clone();
     let by_id = |id: &str| ents.iter().find(|e| e["id"] == id).unwrap_or_else(|| panic!("no entity {id}")).clone();
-    assert_eq!(by_id("rover/base_link")["triangles"][0]["indices"].as_array().expect("indices").len(), 3 * 28);
-    assert_eq!(by_id("rover/camera")["triangles"][0]["indices"].as_array().expect("indices").len(), 3 * 12);
+    let base = by_id("rover/base_link");
+    assert_eq!(base["triangles"][0]["indices"].as_array().expect("indices").len(), 3 * 28);
+    assert_eq!(base["triangles"][1]["indices"].as_array().expect("indices").len(), 3 * 12);
+    assert_eq!(base["cubes"].as_array().expect("cubes").len(), 1);
     assert_eq!(by_id("rover/wheel_fl")["cylinders"].as_array().expect("cyl").len(), 1);
     let v = &topics["/vehicles/rover"];
     assert_eq!(v.len(), 3);

@@ -250,6 +250,22 @@ pub fn describe(scene: &Scene) -> String {
             },
             if v.place_on_soil { "lowered onto the soil" } else { "at the given height" }
         );
+        // Links lumped by fixed joints, under the link that carries them.
+        for (li, l) in m.links.iter().enumerate() {
+            let lumped: Vec<&str> = m.frames.iter().filter(|f| f.link == li).map(|f| f.name.as_str()).collect();
+            if !lumped.is_empty() {
+                let _ = writeln!(
+                    s,
+                    "    {} carries the links fixed to it: {} ({:.3} kg in all)",
+                    l.name,
+                    lumped.join(", "),
+                    l.mass
+                );
+            }
+        }
+        for sub in &m.substitutions {
+            let _ = writeln!(s, "    substitution {sub}");
+        }
         for u in &m.unsupported {
             let _ = writeln!(s, "  warning: vehicle \"{}\": {u}", v.name);
         }

@@ -7,13 +7,13 @@
 //! package_path = [".."]            # roots for package:// (then $REGOLITH_PACKAGE_PATH, $ROS_PACKAGE_PATH)
 //! position = [0.3, 0.3]            # x, y; the wheels are set just above the soil. [x, y, z] fixes the root's z
 //! orientation = [0.0, 0.0, 0.0]    # roll, pitch, yaw (deg)
-//! fsi_links = ["wheel_fl", ...]    # default: the wheel links
+//! fsi_links = ["wheel_fl", ...]    # default: the wheel links; a link on a fixed joint selects its parent
 //! grousers = { count = 12, height = 0.01, thickness = 0.004 }   # added to cylinder wheels
 //! drive = { wheel_speed = 2.0, max_torque = 10.0 }              # rad/s, forward positive
 //! # or  drive = { left = 2.0, right = -2.0, max_torque = 10.0 }   (skid steering)
 //! # or  drive = { joints = { wheel_fl_joint = 2.0 }, max_torque = 10.0 }
 //! # any speed may be a profile [[t, value], ...] (piecewise linear, held after the last point);
-//! # steering = { steer_fl_joint = 15.0 } drives revolute joints to an angle (deg).
+//! # steering = { steer_fl_joint = 15.0 } drives revolute (or non-wheel continuous) joints to an angle (deg).
 //! ```
 //!
 //! "Forward" for a wheel speed means the wheel rolls the vehicle along the root link's +x,
@@ -222,14 +222,16 @@ pub(crate) fn resolve_vehicle(
             Some(Grousers { count: g.count, height: g.height, thickness: g.thickness })
         }
     };
-    let names: Vec<&str> = model.links.iter().map(|l| l.name.as_str()).collect();
+    let names: Vec<&str> =
+        model.links.iter().map(|l| l.name.as_str()).chain(model.frames.iter().map(|f| f.name.as_str())).collect();
     let wheel_links = model.wheel_links();
     let fsi: Vec<usize> = match &v.fsi_links {
         None => wheel_links.clone(),
         Some(list) => list
             .iter()
             .map(|n| {
-                let l = model.link(n).ok_or_else(|| {
+                // A link lumped into its parent by a fixed joint selects that parent.
+                let (l, _) = model.locate(n).ok_or_else(|| {
                     e("fsi_links", format!("no link `{n}` in {}; links: {names:?}", urdf_path.display()))
                 })?;
                 if model.links[l].collision.is_empty() {
@@ -303,11 +305,16 @@ pub(crate) fn resolve_vehicle(
     }
     let joint_names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
     let find_joint = |k: &str, n: &str| {
-        model
-            .joints
-            .iter()
-            .position(|j| j.name == n)
-            .ok_or_else(|| e(k, format!("no joint `{n}`; joints: {joint_names:?}")))
+        model.joints.iter().position(|j| j.name == n).ok_or_else(|| match model.frames.iter().find(|f| f.joint == n) {
+            Some(f) => e(
+                k,
+                format!(
+                    "joint `{n}` is fixed: link `{}` is lumped into `{}`; moving joints: {joint_names:?}",
+                    f.name, model.links[f.link].name
+                ),
+            ),
+            None => e(k, format!("no joint `{n}`; joints: {joint_names:?}")),
+        })
     };
     let mut drive = Vec::new();
     let mut steering = Vec::new();
@@ -341,8 +348,17 @@ pub(crate) fn resolve_vehicle(
         }
         for (n, x) in d.steering.iter().flatten() {
             let ji = find_joint("drive.steering", n)?;
-            if !matches!(model.joints[ji].kind, JointType::Revolute { .. }) {
-                return Err(e("drive.steering", format!("joint `{n}` is not a revolute joint")));
+            // Continuous joints steer too (a Sawppy's corner joints are continuous), but not wheels.
+            let steerable = match model.joints[ji].kind {
+                JointType::Revolute { .. } => true,
+                JointType::Continuous => !wheels.iter().any(|w| w.joint == ji),
+                _ => false,
+            };
+            if !steerable {
+                return Err(e(
+                    "drive.steering",
+                    format!("joint `{n}` is not a revolute (or continuous, non-wheel) joint"),
+                ));
             }
             steering.push((ji, p(&format!("steering.{n}"), x, std::f64::consts::PI / 180.0)?));
         }

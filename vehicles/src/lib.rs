@@ -15,9 +15,13 @@
 //! skid steering, steering joints) is done by the `regolith` facade from a scene's
 //! `[[vehicles]]` section or through its scripting API.
 
+pub mod lump;
 pub mod urdf;
+pub mod xacro;
 
-pub use urdf::{JointModel, JointType, LinkModel, PackagePath, UrdfError, UrdfModel, combine, resolve_uri};
+pub use lump::{MassProperties, combine_mass};
+pub use urdf::{FrameModel, JointModel, JointType, LinkModel, PackagePath, UrdfError, UrdfModel, combine, resolve_uri};
+pub use xacro::Substitution;
 
 use regolith_rigid::{Grousers, Pose, ShapeDesc};
 

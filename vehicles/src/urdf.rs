@@ -5,6 +5,9 @@ use std::path::{Path, PathBuf};
 
 use regolith_rigid::{Axis, Pose, ShapeDesc, load_mesh};
 
+use crate::lump::{MassProperties, combine_mass, rotate_inertia};
+use crate::xacro::Substitution;
+
 /// A URDF that cannot be used: the file and what is wrong (naming the link or joint).
 #[derive(Debug, thiserror::Error)]
 #[error("{}: {message}", file.display())]
@@ -36,6 +39,18 @@ pub enum JointType {
         /// Upper limit (m).
         upper: f64,
     },
+}
+
+impl JointType {
+    /// Its URDF name: `fixed`, `continuous`, `revolute` or `prismatic`.
+    pub fn describe(&self) -> &'static str {
+        match self {
+            Self::Fixed => "fixed",
+            Self::Continuous => "continuous",
+            Self::Revolute { .. } => "revolute",
+            Self::Prismatic { .. } => "prismatic",
+        }
+    }
 }
 
 /// A link: its inertial (link frame) and its geometry.
@@ -81,15 +96,33 @@ pub struct UrdfModel {
     pub name: String,
     /// The file it came from.
     pub path: PathBuf,
-    /// Links.
+    /// The links that move, each with the links fixed to it lumped in (masses, inertias and
+    /// shapes; see [`UrdfModel::parse_with_env`]).
     pub links: Vec<LinkModel>,
-    /// Joints the importer honours.
+    /// The moving joints the importer honours (fixed joints are lumped: see `frames`).
     pub joints: Vec<JointModel>,
+    /// URDF links lumped into [`UrdfModel::links`] by their fixed joints, kept as frames.
+    pub frames: Vec<FrameModel>,
     /// The root link (no parent joint).
     pub root: usize,
     /// Joints and features it could not honour, one line each (`joint "x": planar joints are
     /// not supported; the child link moves freely`), for the caller to report once.
     pub unsupported: Vec<String>,
+    /// The `$(optenv …)` and `$(env …)` substitutions resolved in the file, in order.
+    pub substitutions: Vec<Substitution>,
+}
+
+/// A URDF link lumped into another by a fixed joint: no body of its own, but a named frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameModel {
+    /// The URDF link's name.
+    pub name: String,
+    /// The fixed joint that attached it.
+    pub joint: String,
+    /// The link it is part of (index into [`UrdfModel::links`]).
+    pub link: usize,
+    /// Its frame in that link's frame.
+    pub pose: Pose,
 }
 
 /// Where `package://` URIs are looked up: the search roots in order. A root either contains
@@ -161,68 +194,76 @@ fn pose(p: &urdf_rs::Pose) -> Pose {
     Pose::from_rpy_deg(p.xyz.0, p.rpy.0.map(f64::to_degrees))
 }
 
-/// `R I Rᵀ` for a symmetric tensor given as `[ixx, iyy, izz, ixy, ixz, iyz]`.
-fn rotate_inertia(rot: &Pose, i: [f64; 6]) -> [f64; 6] {
-    let [xx, yy, zz, xy, xz, yz] = i;
-    let m = [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]];
-    let cols = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| rot.rotate(e));
-    // r[a][b] = R_ab: column b of R is the image of e_b.
-    let r = |a: usize, b: usize| cols[b][a];
-    let mut out = [[0.0; 3]; 3];
-    for (a, row) in out.iter_mut().enumerate() {
-        for (b, o) in row.iter_mut().enumerate() {
-            *o = m
-                .iter()
-                .enumerate()
-                .flat_map(|(k, mk)| mk.iter().enumerate().map(move |(l, mkl)| (k, l, *mkl)))
-                .map(|(k, l, mkl)| r(a, k) * mkl * r(b, l))
-                .sum();
-        }
-    }
-    [out[0][0], out[1][1], out[2][2], out[0][1], out[0][2], out[1][2]]
+/// A URDF link before fixed joints are lumped: its mass properties may be zero (a frame).
+struct RawLink {
+    name: String,
+    mass: MassProperties,
+    collision: Vec<(Pose, ShapeDesc)>,
+    visual: Vec<(Pose, ShapeDesc)>,
 }
 
 impl UrdfModel {
-    /// Reads a URDF file; meshes are loaded (and scaled) now, so every missing file is found at
-    /// load time.
+    /// Reads a URDF file, resolving `$(optenv …)` and `$(env …)` from the process
+    /// environment; meshes are loaded (and scaled) now, so every missing file is found at load
+    /// time.
     pub fn load(path: &Path, packages: &PackagePath) -> Result<Self, UrdfError> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| UrdfError { file: path.to_path_buf(), message: format!("cannot read: {e}") })?;
         Self::parse(&text, path, packages)
     }
 
-    /// Parses URDF text; `path` names it in errors and anchors relative mesh paths.
+    /// Parses URDF text; `path` names it in errors and anchors relative mesh paths. The
+    /// environment resolves `$(optenv …)` and `$(env …)`.
     pub fn parse(text: &str, path: &Path, packages: &PackagePath) -> Result<Self, UrdfError> {
+        Self::parse_with_env(text, path, packages, &|name| std::env::var(name).ok())
+    }
+
+    /// [`UrdfModel::parse`] with the variables of `$(optenv …)` and `$(env …)` read through
+    /// `env` (the process environment in [`UrdfModel::parse`]).
+    ///
+    /// Links joined by fixed joints become one link (the parent, as Gazebo and Isaac lump
+    /// them): masses add, inertias combine by the parallel-axis theorem, collision and visual
+    /// shapes are gathered at their poses in the parent frame, and each lumped link is kept as
+    /// a [`FrameModel`]. Links on fixed joints may be massless (sensor and footprint frames);
+    /// a link that moves (on a continuous, revolute or prismatic joint, or the root) needs a
+    /// mass once its fixed children are added.
+    pub fn parse_with_env(
+        text: &str,
+        path: &Path,
+        packages: &PackagePath,
+        env: &dyn Fn(&str) -> Option<String>,
+    ) -> Result<Self, UrdfError> {
         let fail = |message: String| UrdfError { file: path.to_path_buf(), message };
-        let robot = urdf_rs::read_from_string(text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
+        let (text, substitutions) = crate::xacro::substitute(text, env).map_err(fail)?;
+        let robot = urdf_rs::read_from_string(&text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
         let dir = path.parent().unwrap_or(Path::new("."));
-        let mut links = Vec::with_capacity(robot.links.len());
+        let mut raw: Vec<RawLink> = Vec::with_capacity(robot.links.len());
         let mut unsupported = Vec::new();
+        // Visual meshes that are not there: the link is drawn without them (one warning per
+        // URI); a missing collision mesh is an error.
+        let mut missing_visual: Vec<(String, String, Vec<String>)> = Vec::new();
         for l in &robot.links {
-            if links.iter().any(|x: &LinkModel| x.name == l.name) {
+            if raw.iter().any(|x| x.name == l.name) {
                 return Err(fail(format!("link `{}` is defined twice", l.name)));
             }
             let m = l.inertial.mass.value;
-            if !(m > 0.0 && m.is_finite()) {
-                return Err(fail(format!(
-                    "link `{}` has no <inertial> or a zero mass: every link needs a mass (kg) and an inertia (kg m²)",
-                    l.name
-                )));
+            if !(m >= 0.0 && m.is_finite()) {
+                return Err(fail(format!("link `{}`: <mass> must be finite and ≥ 0 kg (got {m})", l.name)));
             }
             let i = &l.inertial.inertia;
             let at = pose(&l.inertial.origin);
             let inertia = rotate_inertia(&at, [i.ixx, i.iyy, i.izz, i.ixy, i.ixz, i.iyz]);
-            if inertia[..3].iter().any(|v| v.is_nan() || *v <= 0.0) {
+            if m > 0.0 && inertia[..3].iter().any(|v| v.is_nan() || *v <= 0.0) {
                 return Err(fail(format!(
                     "link `{}`: inertia must have ixx, iyy, izz > 0 (got {:?})",
                     l.name,
                     [i.ixx, i.iyy, i.izz]
                 )));
             }
-            let geometry = |what: &str,
-                            origin: &urdf_rs::Pose,
-                            g: &urdf_rs::Geometry|
-             -> Result<(Pose, ShapeDesc), UrdfError> {
+            let mut geometry = |what: &str,
+                                origin: &urdf_rs::Pose,
+                                g: &urdf_rs::Geometry|
+             -> Result<Option<(Pose, ShapeDesc)>, UrdfError> {
                 // Sizes and mesh scales finite and positive (non-zero for a scale), origins
                 // finite: a NaN radius would otherwise reach the marker generator.
                 let (sizes, scale): (Vec<f64>, Vec<f64>) = match g {
@@ -260,33 +301,51 @@ impl UrdfModel {
                         (Pose::translation([0.0, 0.0, -0.5 * length]), ShapeDesc::Sphere { radius: *radius }),
                     ]),
                     urdf_rs::Geometry::Mesh { filename, scale } => {
-                        let file = resolve_uri(filename, dir, packages)
-                            .map_err(|m| fail(format!("link `{}` ({what}): {m}", l.name)))?;
+                        let file = match resolve_uri(filename, dir, packages) {
+                            Ok(f) => f,
+                            Err(m) if what == "visual" => {
+                                match missing_visual.iter_mut().find(|(uri, _, _)| uri == filename) {
+                                    Some((_, _, links)) => links.push(l.name.clone()),
+                                    None => missing_visual.push((filename.clone(), m, vec![l.name.clone()])),
+                                }
+                                return Ok(None);
+                            }
+                            Err(m) => return Err(fail(format!("link `{}` ({what}): {m}", l.name))),
+                        };
                         let scale = scale.as_ref().map_or([1.0; 3], |s| s.0);
                         let mesh =
                             load_mesh(&file, scale).map_err(|e| fail(format!("link `{}` ({what}): {e}", l.name)))?;
                         ShapeDesc::Mesh { vertices: mesh.vertices, indices: mesh.indices }
                     }
                 };
-                Ok((at, shape))
+                Ok(Some((at, shape)))
             };
-            let collision =
-                l.collision.iter().map(|c| geometry("collision", &c.origin, &c.geometry)).collect::<Result<_, _>>()?;
-            let visual =
-                l.visual.iter().map(|v| geometry("visual", &v.origin, &v.geometry)).collect::<Result<_, _>>()?;
-            links.push(LinkModel { name: l.name.clone(), mass: m, com: at.translation, inertia, collision, visual });
+            let mut collision = Vec::new();
+            for c in &l.collision {
+                collision.extend(geometry("collision", &c.origin, &c.geometry)?);
+            }
+            let mut visual = Vec::new();
+            for v in &l.visual {
+                visual.extend(geometry("visual", &v.origin, &v.geometry)?);
+            }
+            let mass = MassProperties { mass: m, com: at.translation, inertia };
+            raw.push(RawLink { name: l.name.clone(), mass, collision, visual });
         }
-        if links.is_empty() {
+        for (_, m, links) in missing_visual {
+            let s = if links.len() > 1 { "s" } else { "" };
+            unsupported.push(format!("visual {m}; link{s} `{}` drawn without it", links.join("`, `")));
+        }
+        if raw.is_empty() {
             return Err(fail("the robot has no links".into()));
         }
         let index = |name: &str, joint: &str, role: &str| {
-            links
-                .iter()
+            raw.iter()
                 .position(|l| l.name == name)
                 .ok_or_else(|| fail(format!("joint `{joint}`: {role} link `{name}` is not defined")))
         };
-        let mut joints = Vec::new();
-        let mut has_parent = vec![false; links.len()];
+        // Every honoured joint in URDF link indices, fixed ones included.
+        let mut all_joints = Vec::new();
+        let mut has_parent = vec![false; raw.len()];
         for j in &robot.joints {
             let parent = index(&j.parent.link, &j.name, "parent")?;
             let child = index(&j.child.link, &j.name, "child")?;
@@ -327,10 +386,16 @@ impl UrdfModel {
             if kind != JointType::Fixed && !(n > 0.0 && n.is_finite()) {
                 return Err(fail(format!("joint `{}`: axis {a:?} has zero length", j.name)));
             }
+            if j.joint_type == urdf_rs::JointType::Fixed {
+                // A fixed joint's axis means nothing; its origin must still be finite.
+                if j.origin.xyz.0.iter().chain(&j.origin.rpy.0).any(|v| !v.is_finite()) {
+                    return Err(fail(format!("joint `{}`: <origin> xyz and rpy must be finite", j.name)));
+                }
+            }
             if j.mimic.is_some() {
                 unsupported.push(format!("joint `{}`: <mimic> is not supported; the joint moves on its own", j.name));
             }
-            joints.push(JointModel {
+            all_joints.push(JointModel {
                 name: j.name.clone(),
                 kind,
                 parent,
@@ -340,19 +405,110 @@ impl UrdfModel {
                 effort: if j.limit.effort.is_finite() { j.limit.effort } else { 0.0 },
             });
         }
-        let roots: Vec<usize> = (0..links.len()).filter(|&i| !has_parent[i]).collect();
+        let roots: Vec<usize> = (0..raw.len()).filter(|&i| !has_parent[i]).collect();
         let root = match roots.as_slice() {
             [r] => *r,
-            _ if !unsupported.is_empty() => roots[0],
+            [r, ..] if !unsupported.is_empty() => *r,
             _ => {
-                let names: Vec<&str> = roots.iter().map(|&i| links[i].name.as_str()).collect();
+                let names: Vec<&str> = roots.iter().map(|&i| raw[i].name.as_str()).collect();
                 return Err(fail(format!(
                     "the links form {} trees (roots {names:?}); a robot has one root",
                     roots.len()
                 )));
             }
         };
-        Ok(Self { name: robot.name, path: path.to_path_buf(), links, joints, root, unsupported })
+        // Lumping: each link's body (the nearest ancestor, itself included, that does not hang
+        // on a fixed joint) and its pose in that body's frame.
+        let fixed_parent: Vec<Option<&JointModel>> =
+            (0..raw.len()).map(|c| all_joints.iter().find(|j| j.child == c && j.kind == JointType::Fixed)).collect();
+        let mut body_of = Vec::with_capacity(raw.len());
+        for l in 0..raw.len() {
+            let (mut at, mut cur, mut steps) = (Pose::default(), l, 0);
+            while let Some(j) = fixed_parent[cur] {
+                at = j.origin.compose(&at);
+                cur = j.parent;
+                steps += 1;
+                if steps > raw.len() {
+                    return Err(fail(format!("link `{}`: its fixed joints form a loop", raw[l].name)));
+                }
+            }
+            body_of.push((cur, at));
+        }
+        let bodies: Vec<usize> = (0..raw.len()).filter(|&l| body_of[l].0 == l).collect();
+        let new_index = |raw_link: usize| bodies.iter().position(|&b| b == body_of[raw_link].0).unwrap_or(0);
+        let mut links = Vec::with_capacity(bodies.len());
+        for &b in &bodies {
+            let parts: Vec<usize> = (0..raw.len()).filter(|&l| body_of[l].0 == b).collect();
+            let mass = combine_mass(&parts.iter().map(|&l| (body_of[l].1, raw[l].mass)).collect::<Vec<_>>());
+            if mass.mass <= 0.0 {
+                let how = match all_joints.iter().find(|j| j.child == b) {
+                    Some(j) => format!("moves on joint `{}` ({})", j.name, j.kind.describe()),
+                    None if b == root => "is the root, which moves freely".to_string(),
+                    None => "is left unattached by an unsupported joint".to_string(),
+                };
+                let lumped: Vec<&str> = parts.iter().filter(|&&l| l != b).map(|&l| raw[l].name.as_str()).collect();
+                let with = if lumped.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (nor do the links fixed to it: {})", lumped.join(", "))
+                };
+                return Err(fail(format!(
+                    "link `{}` has no <inertial> or a zero mass{with} but {how}: a moving link needs a mass (kg) \
+                     and an inertia (kg m²); only links on fixed joints may be massless",
+                    raw[b].name
+                )));
+            }
+            let place = |l: usize, shapes: &[(Pose, ShapeDesc)]| {
+                shapes.iter().map(|(at, s)| (body_of[l].1.compose(at), s.clone())).collect::<Vec<_>>()
+            };
+            links.push(LinkModel {
+                name: raw[b].name.clone(),
+                mass: mass.mass,
+                com: mass.com,
+                inertia: mass.inertia,
+                collision: parts.iter().flat_map(|&l| place(l, &raw[l].collision)).collect(),
+                visual: parts.iter().flat_map(|&l| place(l, &raw[l].visual)).collect(),
+            });
+        }
+        let frames = all_joints
+            .iter()
+            .filter(|j| j.kind == JointType::Fixed)
+            .map(|j| FrameModel {
+                name: raw[j.child].name.clone(),
+                joint: j.name.clone(),
+                link: new_index(j.child),
+                pose: body_of[j.child].1,
+            })
+            .collect();
+        // The moving joints between bodies: a joint's frame in its parent body's frame.
+        let joints = all_joints
+            .into_iter()
+            .filter(|j| j.kind != JointType::Fixed)
+            .map(|j| JointModel {
+                origin: body_of[j.parent].1.compose(&j.origin),
+                parent: new_index(j.parent),
+                child: new_index(j.child),
+                ..j
+            })
+            .collect();
+        Ok(Self {
+            name: robot.name,
+            path: path.to_path_buf(),
+            links,
+            joints,
+            frames,
+            root: new_index(root),
+            unsupported,
+            substitutions,
+        })
+    }
+
+    /// Where a URDF link is, lumped or not: the index of the link (in [`UrdfModel::links`]) it
+    /// is part of and its frame's pose in that link's frame.
+    pub fn locate(&self, name: &str) -> Option<(usize, Pose)> {
+        self.link(name)
+            .map(|l| (l, Pose::default()))
+            .or_else(|| self.frames.iter().find(|f| f.name == name).map(|f| (f.link, f.pose)))
     }
 
     /// Index of a link by name.
