@@ -115,6 +115,12 @@ case!(
     "{}:3: key `simulation.integrator`: unknown variant `rk4`, expected `rk2` or `euler`"
 );
 case!(
+    euler_refused,
+    "dt = \"auto\"",
+    "integrator = \"euler\"",
+    "{}:3: key `simulation.integrator`: \"euler\" is unstable for soil at rest (a geostatic bed blows apart); use \"rk2\""
+);
+case!(
     unknown_section,
     "[sph]",
     "[fluid]\nx = 1\n[sph]",
@@ -173,6 +179,12 @@ case!(
     "spacing = 0.02",
     "spacing = 0.02\nfree_surface_threshold = 3.5",
     "{}:7: key `sph.free_surface_threshold`: must be in (0, 1): the smallest eigenvalue of Σ V (x_b − x_a) ⊗ ∇W is 1 inside the soil (got 3.5)"
+);
+case!(
+    free_surface_without_effect,
+    "spacing = 0.02",
+    "spacing = 0.02\nfree_surface = false",
+    "{}:7: key `sph.free_surface`: changes nothing here: the free-surface flags act only with free_surface_stress = \"zero\" or PPST shifting (shifting = \"ppst\" or \"ppst+xsph\")"
 );
 case!(
     shifting_unknown,

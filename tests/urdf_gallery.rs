@@ -83,8 +83,10 @@ fn the_husky_imports_as_shipped_with_its_frames_lumped_and_optenv_defaults() {
     );
     let (link, imu) = m.locate("imu_link").expect("imu frame");
     assert_eq!(link, 0);
+    // The file's own rounded angles (not π/2 and π): the pose must be what it says.
+    let (pitch, yaw): (f64, f64) = ("-1.5708".parse().expect("f64"), "3.1416".parse().expect("f64"));
     let want = Pose::translation([0.0, 0.0, 0.14493])
-        .compose(&Pose::from_rpy_deg([0.19, 0.0, 0.149], [0.0, -1.5708f64.to_degrees(), 3.1416f64.to_degrees()]));
+        .compose(&Pose::from_rpy_deg([0.19, 0.0, 0.149], [0.0, pitch.to_degrees(), yaw.to_degrees()]));
     assert!(imu.translation.iter().zip(want.translation).all(|(a, b)| (a - b).abs() < 1e-12), "{imu:?}");
     assert!(imu.rotation.iter().zip(want.rotation).all(|(a, b)| (a - b).abs() < 1e-12), "{imu:?}");
     // Set in the environment, the variable wins.

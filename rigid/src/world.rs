@@ -444,6 +444,16 @@ impl RigidWorld {
         self.bodies[b.0].extra = force;
     }
 
+    /// Locks a body's rotations: it only translates (a rig's sled or carriage on its rails).
+    /// Its rotational inertia is then infinite to the solver, so a motor or joint acting on it
+    /// pushes against a frame instead of a light part it would spin up. A chain of light rig
+    /// parts before a heavy wheel otherwise lets the iterative joint solver pass on only a
+    /// fraction of a velocity motor's torque (see NOTES.md, "A driven wheel that did not drive").
+    pub fn lock_rotations(&mut self, b: BodyId) {
+        let handle = self.bodies[b.0].handle;
+        self.world.bodies[handle].lock_rotations(true, true);
+    }
+
     /// Sets a free body's velocity (m/s, rad/s), e.g. an impactor's speed at the start
     /// (ignored for other motions: a prescribed body's is set by
     /// [`Self::set_prescribed_velocity`]).

@@ -18,8 +18,12 @@ use crate::sim::Simulation;
 struct WheelRun {
     /// Prescribed slip (slip mode) or the measured mean slip (tow mode).
     slip: f64,
-    /// Mean measured slip `1 − v / (ω R)` over the second half.
+    /// Measured slip over the second half, `1 − v̄ / (ω̄ R)` from the carriage's mean speed
+    /// and the wheel's mean measured spin (as Chrono's CRM study reads it).
     measured_slip: f64,
+    /// Mean measured spin of the wheel about its axle over the second half (rad/s): the
+    /// motor holds the commanded ω to within its compliance.
+    spin: f64,
     /// Mean drawbar pull: the soil's horizontal force on the wheel along travel (N).
     drawbar_pull: f64,
     /// Mean driving torque: minus the soil's torque about the axle (N m).
@@ -121,6 +125,14 @@ pub(super) fn wheel<T: Real>(
             }
         };
         let carriage = rigid.add_body(&small("rig carriage", Motion::Free)).map_err(rig_err)?;
+        // The sled and carriage only translate, as on a real rig's rails. Left free to turn,
+        // the 1 kg carriage (4e-4 kg m²) is all the axle motor pushes against: rapier's
+        // iterative solver then passes on a stall torque of only about 4 N m s × ω, and a
+        // loaded wheel stops turning (the slip ≈ 1 of the GRC-1 study).
+        rigid.lock_rotations(carriage);
+        if !matches!(drive, WheelDrive::Slips(_)) {
+            rigid.lock_rotations(sled);
+        }
         if slope.is_some() {
             // The load is a mass `load / |g|` under the tilted gravity: the carriage carries
             // what the wheel and carriage do not weigh (normal to the bed), and along the
@@ -156,15 +168,16 @@ pub(super) fn wheel<T: Real>(
             })
             .map_err(rig_err)?;
         let label = slip.or(slope).unwrap_or(f64::NAN);
-        let s = series.get_or_insert_with(|| Series::new(&sim, multi, &["slip", "drawbar_pull", "torque", "sinkage"]));
-        let mut rows: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
-        let names = ["slip", "drawbar_pull", "torque", "sinkage"];
-        let record = |driver: &mut Driver<'_, T>, sim: &Simulation<T>, v: [f64; 4]| {
-            let fields = [(names[0], v[0]), (names[1], v[1]), (names[2], v[2]), (names[3], v[3])];
+        let names = ["slip", "drawbar_pull", "torque", "sinkage", "omega"];
+        let s = series.get_or_insert_with(|| Series::new(&sim, multi, &names));
+        // (time, slip, DBP, torque, sinkage, carriage speed, spin) per exchange.
+        let mut rows: Vec<[f64; 7]> = Vec::new();
+        let record = |driver: &mut Driver<'_, T>, sim: &Simulation<T>, v: [f64; 5]| {
+            let fields: Vec<(&str, f64)> = names.iter().copied().zip(v).collect();
             driver.publish(sim, "/rig/wheel", "regolith.Rig.wheel", &fields)
         };
         driver.begin(&sim, multi.then_some(label))?;
-        record(driver, &sim, [1.0, 0.0, 0.0, 0.0])?;
+        record(driver, &sim, [1.0, 0.0, 0.0, 0.0, 0.0])?;
         while sim.time() < sc.end_time * (1.0 - 1e-12) {
             if let Err(e) = driver.step(&mut sim) {
                 stopped = Some(halt(e)?);
@@ -172,23 +185,29 @@ pub(super) fn wheel<T: Real>(
             }
             let st = sim.body_state(sim.body_at(body));
             let w = sim.fsi_wrench(sim.body_at(body));
-            let measured = 1.0 - st.linvel[0] / (omega * radius);
+            // The wheel's own spin about the axle (y), as an encoder on the axle reads it; the
+            // slip of each sample uses it (the commanded ω while the wheel is at rest).
+            let spin = st.angvel[1];
+            let turning = if spin.abs() > 1e-9 { spin } else { omega };
+            let measured = 1.0 - st.linvel[0] / (turning * radius);
             let (dbp, torque, sinkage) = (w.force[0], -w.torque[1], centre[2] - st.origin[2]);
-            s.push(&sim, multi.then_some(label), &[measured, dbp, torque, sinkage]);
-            record(driver, &sim, [measured, dbp, torque, sinkage])?;
-            rows.push((sim.time(), measured, dbp, torque, sinkage));
+            s.push(&sim, multi.then_some(label), &[measured, dbp, torque, sinkage, spin]);
+            record(driver, &sim, [measured, dbp, torque, sinkage, spin])?;
+            rows.push([sim.time(), measured, dbp, torque, sinkage, st.linvel[0], spin]);
         }
-        let half: Vec<_> = rows.iter().filter(|r| r.0 >= 0.5 * sc.end_time).collect();
+        let half: Vec<_> = rows.iter().filter(|r| r[0] >= 0.5 * sc.end_time).collect();
         let n = half.len().max(1) as f64;
-        let mean = |f: fn(&(f64, f64, f64, f64, f64)) -> f64| half.iter().map(|r| f(r)).sum::<f64>() / n;
-        let measured = mean(|r| r.1);
-        let spread = (half.iter().map(|r| (r.1 - measured).powi(2)).sum::<f64>() / n).sqrt();
+        let mean = |k: usize| half.iter().map(|r| r[k]).sum::<f64>() / n;
+        let spin = mean(6);
+        let measured = if spin.abs() > 1e-9 { 1.0 - mean(5) / (spin * radius) } else { mean(1) };
+        let spread = (half.iter().map(|r| (r[1] - measured).powi(2)).sum::<f64>() / n).sqrt();
         runs.push(WheelRun {
             slip: slip.unwrap_or(measured),
             measured_slip: measured,
-            drawbar_pull: mean(|r| r.2),
-            torque: mean(|r| r.3),
-            sinkage: mean(|r| r.4),
+            spin,
+            drawbar_pull: mean(2),
+            torque: mean(3),
+            sinkage: mean(4),
             slope_deg: slope,
             slip_std: slip.is_none().then_some(spread),
             downhill_load_n: slope.map(|d| load * d.to_radians().sin()),

@@ -6,7 +6,7 @@
 //! [simulation]
 //! end_time = 1.0            # s
 //! dt = "auto"               # or a fixed step in s, at most 0.5 h / c (refused above)
-//! integrator = "rk2"        # or "euler"
+//! integrator = "rk2"        # the only one a scene takes ("euler" is refused: unstable)
 //! gravity = [0.0, 0.0, -9.81]
 //! backend = "cpu"           # "auto" | "cpu" | "wgpu"
 //! precision = "f64"         # or "f32"
