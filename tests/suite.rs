@@ -50,6 +50,8 @@ mod repose;
 mod rig_calibration;
 #[path = "scene_errors.rs"]
 mod scene_errors;
+#[path = "settings_reach.rs"]
+mod settings_reach;
 #[path = "traction.rs"]
 mod traction;
 #[path = "triaxial.rs"]
