@@ -41,22 +41,46 @@ if ! "$VENV/bin/python" -c "import maturin, pytest, numpy, ray" 2>/dev/null; the
     "$VENV/bin/python" -m pip install -q --disable-pip-version-check "${PY_DEPS[@]}"
 fi
 
-cargo fmt --all -- --check
+# Each phase's wall time is kept and printed at the end with the ten slowest tests, so that a
+# CI log says where its minutes went (issue 46: the suite must fit in 30 minutes on 2 cores).
+PHASES=()
+SECONDS=0
+phase() {
+    local name="$1"
+    shift
+    local t0=$SECONDS
+    "$@"
+    PHASES+=("$(printf '%6d s  %s' $((SECONDS - t0)) "$name")")
+}
+mkdir -p target
+TEST_LOG=target/test-times.log
+# The test binaries run through scripts/timed_test_runner.sh, which adds libtest's per-test
+# times to their output (see that file); the builds are the same as without it.
+host=$(rustc -vV | sed -n 's/^host: //p')
+runner_var="CARGO_TARGET_$(echo "$host" | tr 'a-z-' 'A-Z_')_RUNNER"
+cargo_tests() {
+    env "$runner_var=$PWD/scripts/timed_test_runner.sh" \
+        cargo test --release --workspace --all-targets --exclude regolith-python 2>&1 | tee "$TEST_LOG"
+}
+
+phase "rustfmt" cargo fmt --all -- --check
 # Lints (missing docs included: the workspace lints make it a warning, -D warnings an error).
-cargo clippy --release --workspace --all-targets -- -D warnings
+phase "clippy" cargo clippy --release --workspace --all-targets -- -D warnings
 # The library builds without its optional parts (CLI, wgpu, MCAP, plots), and with wgpu alone.
-cargo check --release -p regolith --lib --no-default-features
-cargo check --release -p regolith --lib --no-default-features --features wgpu
+phase "check without features" cargo check --release -p regolith --lib --no-default-features
+phase "check with wgpu alone" cargo check --release -p regolith --lib --no-default-features --features wgpu
 # The API docs build without a broken link or an undocumented public item.
 # (--release: the proc macros and build scripts the release builds above made are reused.)
-RUSTDOCFLAGS="-D warnings -D missing_docs" cargo doc --release --workspace --no-deps
+phase "rustdoc" env RUSTDOCFLAGS="-D warnings -D missing_docs" cargo doc --release --workspace --no-deps
 # (The Python bindings crate has no Rust tests: pytest tests it below.)
-cargo test --release --workspace --all-targets --exclude regolith-python
-cargo test --release --workspace --doc --exclude regolith-python
+phase "test build" cargo test --release --workspace --all-targets --exclude regolith-python --no-run
+phase "tests" cargo_tests
+phase "doc tests" cargo test --release --workspace --doc --exclude regolith-python
 # The Python package: installed as a user installs it (pip builds the abi3 wheel with
 # maturin, into the same target folder), then its tests, which also drive the CLI binary.
-PATH="$(cd "$VENV" && pwd)/bin:$PATH" "$VENV/bin/python" -m pip install -q --disable-pip-version-check --no-build-isolation ./python
-"$VENV/bin/python" -m pytest -q python/tests
+phase "python wheel" env PATH="$(cd "$VENV" && pwd)/bin:$PATH" "$VENV/bin/python" -m pip install -q \
+    --disable-pip-version-check --no-build-isolation ./python
+phase "pytest" "$VENV/bin/python" -m pytest -q --durations=5 python/tests
 # The stability suite at CI size: the hard cases of examples/hard/ within their [[expect]]
 # bounds. thin_grousers and wheel_full_slip pass at CI size too but take about 2 minutes each
 # on 2 cores; they run with `regolith study stability` (docs/stability.md), not here, until the
@@ -66,4 +90,12 @@ CI_CASES=$CI_CASES,heavy_plate,jet_at_wall,mcc_ocr5000,mcc_small_lambda_kappa,so
 CI_CASES=$CI_CASES,sphere_impact,stiffness_contrast,wheel_drop,geostatic_20s,rover_slope_30
 # The binary the integration tests built (`cargo run` would rebuild it without the test
 # dependencies' features: four more minutes).
-"${CARGO_TARGET_DIR:-target}/release/regolith" study stability --size ci --cases "$CI_CASES" --out target/stability-ci
+phase "stability (CI size)" "${CARGO_TARGET_DIR:-target}/release/regolith" study stability --size ci --cases "$CI_CASES" --out target/stability-ci
+
+echo
+echo "test.sh: the ten slowest tests (libtest's times; two tests run at once):"
+sed -nE 's/^test (.+) \.\.\. ok <([0-9.]+)s>$/\2 \1/p' "$TEST_LOG" | sort -rn | head -10 |
+    awk '{ printf "%8.1f s  %s\n", $1, $2 }'
+echo "test.sh: wall time by phase:"
+printf '%s\n' "${PHASES[@]}"
+echo "test.sh: all phases passed in $SECONDS s"

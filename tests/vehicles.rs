@@ -520,6 +520,30 @@ fn vehicle_scene_mistakes_are_one_line_errors() {
             ),
             "key `vehicles[0].drive.wheel_speed`: must be a number or a list of [time s, value] pairs with increasing times",
         ),
+        (
+            format!(
+                "urdf = \"{}\"\npackage_path = [\"{}\"]\nposition = [0.3, 0.3]\ndifferential = {{ left = \"wheel_fl_joint\", right = \"wheel_fr_joint\" }}",
+                urdf.display(),
+                examples().display()
+            ),
+            "key `vehicles[0].differential.left`: joint `wheel_fl_joint` is a wheel joint, not a rocker",
+        ),
+        (
+            format!(
+                "urdf = \"{}\"\npackage_path = [\"{}\"]\nposition = [0.3, 0.3]\ndifferential = {{ left = \"mast_joint\", right = \"wheel_fr_joint\" }}",
+                urdf.display(),
+                examples().display()
+            ),
+            "key `vehicles[0].differential.left`: joint `mast_joint` is fixed",
+        ),
+        (
+            format!(
+                "urdf = \"{}\"\npackage_path = [\"{}\"]\nposition = [0.3, 0.3]\ndifferential = {{ left = \"wheel_fl_joint\", right = \"wheel_fl_joint\" }}",
+                urdf.display(),
+                examples().display()
+            ),
+            "key `vehicles[0].differential`: left and right are the same joint `wheel_fl_joint`",
+        ),
     ];
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("vehicle_scene_errors");
     std::fs::create_dir_all(&dir).expect("dir");
@@ -539,6 +563,19 @@ fn vehicle_scene_mistakes_are_one_line_errors() {
         assert_eq!(err.trim().lines().count(), 1, "case {i}: {err}");
         assert!(err.contains(expected), "case {i}: expected `{expected}` in: {err}");
     }
+    // Placed through a side wall: found when the scene is built (exit 1, as a vehicle placed
+    // off the soil), still one line naming the link, its reach and the wall.
+    let p = dir.join("through_wall.toml");
+    let vehicle =
+        format!("urdf = \"{}\"\npackage_path = [\"{}\"]\nposition = [0.05, 0.3]", urdf.display(), examples().display());
+    std::fs::write(&p, format!("{}\n[[vehicles]]\nname = \"rover\"\n{vehicle}\n", bed_text(0.1))).expect("write");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_regolith")).arg("check").arg(&p).output().expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!((o.status.code(), err.trim().lines().count()), (Some(1), 1), "{err}");
+    assert!(
+        err.contains("vehicles[0]: vehicle \"rover\" does not fit in the container: link `base_link` reaches x = -0.150 m, beyond the wall at 0.000 m"),
+        "{err}"
+    );
 }
 
 #[test]

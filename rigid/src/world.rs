@@ -162,6 +162,12 @@ fn v3(a: [f64; 3]) -> Vector {
 fn a3(v: Vector) -> [f64; 3] {
     [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
 }
+/// An angle brought into (−π, π].
+fn wrap_angle(a: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let w = a.rem_euclid(TAU);
+    if w > PI { w - TAU } else { w }
+}
 fn quat(q: [f64; 4]) -> Rotation {
     Rotation::from_xyzw(q[0] as Real, q[1] as Real, q[2] as Real, q[3] as Real).normalize()
 }
@@ -196,14 +202,31 @@ pub struct RigidWorld {
     world: PhysicsWorld,
     bodies: Vec<BodyRecord>,
     joints: Vec<JointRecord>,
+    differentials: Vec<Differential>,
+    /// Collision groups handed out by [`RigidWorld::ignore_collisions_among`].
+    groups_used: u32,
     time: f64,
 }
+
+/// Two revolute joints held to `θ_left + sign θ_right = 0` (see [`RigidWorld::add_differential`]).
+#[derive(Clone, Copy, Debug)]
+struct Differential {
+    left: JointId,
+    right: JointId,
+    sign: f64,
+}
+
+/// Natural frequency (Hz) of the spring that stands for a differential bar: its period (20 ms)
+/// is long against a rigid step (at most a 1 ms exchange, usually an SPH step of ~0.1 ms), so
+/// the explicit spring is stable (ω dt ≤ 0.31), and short against a rocker's swing over
+/// terrain.
+const DIFFERENTIAL_HZ: f64 = 50.0;
 
 impl RigidWorld {
     /// An empty world with the given gravity (m/s², world frame).
     pub fn new(gravity: [f64; 3]) -> Self {
         let world = PhysicsWorld { gravity: v3(gravity), ..Default::default() };
-        Self { world, bodies: Vec::new(), joints: Vec::new(), time: 0.0 }
+        Self { world, bodies: Vec::new(), joints: Vec::new(), differentials: Vec::new(), groups_used: 0, time: 0.0 }
     }
 
     /// Simulated time (s).
@@ -424,6 +447,147 @@ impl RigidWorld {
         }
     }
 
+    /// Makes `bodies` ignore collisions among themselves while still colliding with every other
+    /// body and wall: the links of one robot, which Gazebo, PyBullet and Isaac keep apart by
+    /// default (a URDF's link shapes often overlap at its joints, and a rocker-bogie's corner
+    /// blocks overlap its rockers). Each call takes one of 32 collision groups; a body that
+    /// collides with nothing stays so. Errors when the groups are used up.
+    pub fn ignore_collisions_among(&mut self, bodies: &[BodyId]) -> Result<(), RigidError> {
+        if self.groups_used >= 32 {
+            return Err(RigidError::Invalid(
+                "more than 32 sets of bodies that ignore collisions among themselves (one per robot)".into(),
+            ));
+        }
+        let bit = Group::from_bits_truncate(1u32 << self.groups_used);
+        self.groups_used += 1;
+        let groups = InteractionGroups::new(bit, Group::ALL.difference(bit), InteractionTestMode::And);
+        for b in bodies {
+            let handle = self.bodies[b.0].handle;
+            for c in self.world.bodies[handle].colliders().to_vec() {
+                let collider = &mut self.world.colliders[c];
+                if collider.collision_groups() != InteractionGroups::none() {
+                    collider.set_collision_groups(groups);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Couples two revolute joints the way a rocker-bogie rover's differential bar couples its
+    /// rockers: `θ_left + sign θ_right = 0` (`sign` +1 when their axes point the same way, −1
+    /// when opposite), the angles measured from the pose the joints were made in. The bar is a
+    /// stiff, critically damped spring on that sum (see [`DIFFERENTIAL_HZ`]), applied at each
+    /// step as equal torques on the two rockers about their axes and the opposite on the link
+    /// they hang from: the pair keeps its opposite swing freely and resists only a common one.
+    /// Errors if either joint is not revolute, they are the same, or they do not share a parent.
+    pub fn add_differential(&mut self, left: JointId, right: JointId, sign: f64) -> Result<(), RigidError> {
+        let revolute = |j: JointId| self.joints[j.0].kind == JointKind::Revolute;
+        let parent = |j: JointId| self.world.impulse_joints.get(self.joints[j.0].handle).map(|x| x.body1());
+        if left == right || !revolute(left) || !revolute(right) || parent(left) != parent(right) || sign.abs() != 1.0 {
+            return Err(RigidError::Invalid(format!(
+                "differential between \"{}\" and \"{}\": needs two distinct revolute joints on one parent body and a sign of ±1",
+                self.joints[left.0].name, self.joints[right.0].name
+            )));
+        }
+        self.differentials.push(Differential { left, right, sign });
+        Ok(())
+    }
+
+    /// The bars' torques on their bodies for this step (explicit: from the joints' angles and
+    /// rates now).
+    fn differential_torques(&self) -> Vec<(RigidBodyHandle, Vector)> {
+        let w = (2.0 * std::f64::consts::PI * DIFFERENTIAL_HZ) as Real;
+        let mut out = Vec::new();
+        for d in &self.differentials {
+            let (Some((al, wl)), Some((ar, wr))) = (self.joint_position(d.left), self.joint_position(d.right)) else {
+                continue;
+            };
+            let (Some((jl, fl, _)), Some((jr, fr, _))) = (self.joint_frames(d.left), self.joint_frames(d.right)) else {
+                continue;
+            };
+            let (axl, axr) = (fl.rotation * Vector::X, fr.rotation * Vector::X);
+            let s = d.sign as Real;
+            // The sum's inverse inertia: g = θl + s θr moves with either rocker (and all that
+            // hangs from it, turning about its pivot) and twice with the body.
+            let inv_sum = 1.0 / self.subtree_inertia(jl.body2(), jl.body1(), fl.translation, axl)
+                + 1.0 / self.subtree_inertia(jr.body2(), jr.body1(), fr.translation, axr)
+                + 4.0 * self.inverse_inertia_about(jl.body1(), axl);
+            if !(inv_sum > 0.0 && inv_sum.is_finite()) {
+                continue;
+            }
+            let (g, g_rate) = (wrap_angle(al + d.sign * ar) as Real, (wl + d.sign * wr) as Real);
+            let tau = -(w * w * g + 2.0 * w * g_rate) / inv_sum;
+            out.push((jl.body2(), axl * tau));
+            out.push((jr.body2(), axr * (s * tau)));
+            out.push((jl.body1(), -(axl * tau + axr * (s * tau))));
+        }
+        out
+    }
+
+    /// `a · I⁻¹ a` of a body about its centre of mass (1 / its moment about `a` when `a` is a
+    /// principal axis; 0 for a fixed body).
+    fn inverse_inertia_about(&self, h: RigidBodyHandle, a: Vector) -> Real {
+        let m = &self.world.bodies[h].mass_properties().effective_world_inv_inertia;
+        a.x * (m.m11 * a.x + m.m12 * a.y + m.m13 * a.z)
+            + a.y * (m.m12 * a.x + m.m22 * a.y + m.m23 * a.z)
+            + a.z * (m.m13 * a.x + m.m23 * a.y + m.m33 * a.z)
+    }
+
+    /// The moment of inertia about the line through `pivot` along `a` of `root` and every body
+    /// joined to it except through `parent` (a rocker with its bogie, corners and wheels), as
+    /// if rigid: each body's own moment (taken as 1 / `a · I⁻¹ a`) plus `m r²`.
+    fn subtree_inertia(&self, root: RigidBodyHandle, parent: RigidBodyHandle, pivot: Vector, a: Vector) -> Real {
+        let (mut seen, mut todo, mut total) = (vec![parent, root], vec![root], 0.0);
+        while let Some(h) = todo.pop() {
+            let b = &self.world.bodies[h];
+            let own = self.inverse_inertia_about(h, a);
+            let r = (b.center_of_mass() - pivot).cross(a);
+            total += if own > 0.0 { 1.0 / own } else { 0.0 } + b.mass() * r.dot(r);
+            for (h1, h2, _, _) in self.world.impulse_joints.attached_joints(h) {
+                let other = if h1 == h { h2 } else { h1 };
+                if !seen.contains(&other) {
+                    seen.push(other);
+                    todo.push(other);
+                }
+            }
+        }
+        total
+    }
+
+    /// A joint and its two frames in the world (on its first and second body).
+    fn joint_frames(&self, j: JointId) -> Option<(&ImpulseJoint, rapier3d::math::Pose, rapier3d::math::Pose)> {
+        let joint = self.world.impulse_joints.get(self.joints[j.0].handle)?;
+        let f1 = *self.world.bodies[joint.body1()].position() * joint.data.local_frame1;
+        let f2 = *self.world.bodies[joint.body2()].position() * joint.data.local_frame2;
+        Some((joint, f1, f2))
+    }
+
+    /// A revolute joint's angle (rad, in (−π, π]) and rate (rad/s) about its axis, or a
+    /// prismatic joint's offset (m) and rate (m/s) along it, both from the pose the joint was
+    /// made in; `None` for a fixed joint.
+    pub fn joint_position(&self, j: JointId) -> Option<(f64, f64)> {
+        let (joint, f1, f2) = self.joint_frames(j)?;
+        let (b1, b2) = (&self.world.bodies[joint.body1()], &self.world.bodies[joint.body2()]);
+        let axis = f1.rotation * Vector::X;
+        match self.joints[j.0].kind {
+            JointKind::Revolute => {
+                // The twist about the joint's x: the locked axes leave the relative rotation
+                // (cos θ/2, sin θ/2 along x).
+                let rel = f1.rotation.inverse() * f2.rotation;
+                let angle = 2.0 * f64::from(rel.x).atan2(f64::from(rel.w));
+                let rate = (b2.angvel() - b1.angvel()).dot(axis);
+                Some((wrap_angle(angle), f64::from(rate)))
+            }
+            JointKind::Prismatic => {
+                let offset = (f2.translation - f1.translation).dot(axis);
+                let (o1, o2) = (f1.translation, f2.translation);
+                let rate = (b2.velocity_at_point(o2) - b1.velocity_at_point(o1)).dot(axis);
+                Some((f64::from(offset), f64::from(rate)))
+            }
+            JointKind::Fixed => None,
+        }
+    }
+
     /// Limits a revolute or prismatic joint's position to `[lower, upper]` (rad or m).
     pub fn set_joint_limits(&mut self, j: JointId, lower: f64, upper: f64) {
         if let Some((axis, data)) = self.free_axis(j) {
@@ -524,6 +688,9 @@ impl RigidWorld {
                     body.set_next_kinematic_position(next);
                 }
             }
+        }
+        for (h, torque) in self.differential_torques() {
+            self.world.bodies[h].add_torque(torque, true);
         }
         self.world.step();
         for (rec, (v0, w0)) in self.bodies.iter_mut().zip(before) {

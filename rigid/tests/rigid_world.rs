@@ -228,3 +228,88 @@ fn a_carriage_on_a_moving_sled_drops_freely_and_rolls_its_wheel() {
     assert!((s.linvel[0] - 0.1).abs() < 1e-3, "it follows the sled: vx = {}", s.linvel[0]);
     assert!((s.angvel[1] - 1.0).abs() < 0.05, "it spins at the motor speed: ω = {:?}", s.angvel);
 }
+
+/// A fixed chassis with two 2 kg rockers on revolute joints about y (pivots at their centres,
+/// no gravity), coupled by a differential; returns the world, the rockers and their joints.
+fn rockers_on_a_differential() -> (RigidWorld, [regolith_rigid::BodyId; 2], [regolith_rigid::JointId; 2]) {
+    let mut w = RigidWorld::new([0.0; 3]);
+    let chassis = w
+        .add_body(&body("chassis", ShapeDesc::Box { size: [0.2, 0.2, 0.1] }, 10.0, [0.0, 0.0, 1.0], Motion::Fixed))
+        .expect("chassis");
+    let mut rockers = Vec::new();
+    let mut joints = Vec::new();
+    for (name, y) in [("left", 0.3), ("right", -0.3)] {
+        let r = w
+            .add_body(&body(name, ShapeDesc::Box { size: [0.4, 0.05, 0.05] }, 2.0, [0.0, y, 1.0], Motion::Free))
+            .expect("rocker");
+        let j = w
+            .add_joint(&JointDesc {
+                name: format!("{name}_rocker"),
+                body1: chassis,
+                body2: r,
+                kind: JointKind::Revolute,
+                anchor: [0.0, y, 1.0],
+                axis: [0.0, 1.0, 0.0],
+                motor: None,
+            })
+            .expect("joint");
+        rockers.push(r);
+        joints.push(j);
+    }
+    w.add_differential(joints[0], joints[1], 1.0).expect("differential");
+    (w, [rockers[0], rockers[1]], [joints[0], joints[1]])
+}
+
+#[test]
+fn a_differential_lets_the_rockers_swing_oppositely_and_holds_them_against_a_common_swing() {
+    // Opposite torques (the differential's free mode): each rocker turns as if alone,
+    // θ = ½ (τ / I) t² with I = m (L² + h²) / 12 about y; the other mirrors it.
+    let (mut w, [l, r], [jl, jr]) = rockers_on_a_differential();
+    let (tau, inertia, t) = (0.5, 2.0 * (0.4f64.powi(2) + 0.05f64.powi(2)) / 12.0, 0.2);
+    w.set_wrench(l, [0.0; 3], [0.0, tau, 0.0]);
+    w.set_wrench(r, [0.0; 3], [0.0, -tau, 0.0]);
+    for _ in 0..200 {
+        w.step(t / 200.0);
+    }
+    let (al, wl) = w.joint_position(jl).expect("revolute");
+    let (ar, wr) = w.joint_position(jr).expect("revolute");
+    let expected = 0.5 * tau / inertia * t * t;
+    assert!((al - expected).abs() < 0.02 * expected, "left rocker {al} rad, free rotation gives {expected}");
+    assert!((al + ar).abs() < 1e-3 && (wl + wr).abs() < 1e-2, "θ {al} + {ar}, ω {wl} + {wr}");
+    // The joint angle is the rocker's own rotation about y (the chassis is fixed).
+    let q = w.state(l).rotation;
+    assert!((2.0 * q[1].atan2(q[3]) - al).abs() < 1e-5, "{q:?} against {al}");
+
+    // Equal torques (the mode the bar forbids): the rockers barely move against the fixed
+    // chassis; left alone each would turn `expected` rad in the same time.
+    let (mut w, [l, r], [jl, jr]) = rockers_on_a_differential();
+    w.set_wrench(l, [0.0; 3], [0.0, tau, 0.0]);
+    w.set_wrench(r, [0.0; 3], [0.0, tau, 0.0]);
+    for _ in 0..200 {
+        w.step(t / 200.0);
+    }
+    let (al, ar) = (w.joint_position(jl).expect("revolute").0, w.joint_position(jr).expect("revolute").0);
+    assert!(al.abs() < 1e-3 && ar.abs() < 1e-3, "held: θ = {al}, {ar} rad");
+}
+
+#[test]
+fn a_differential_needs_two_distinct_revolute_joints() {
+    let (mut w, _, [jl, _]) = rockers_on_a_differential();
+    assert!(w.add_differential(jl, jl, 1.0).is_err());
+    let a = w.add_body(&body("a", ShapeDesc::Box { size: [0.1; 3] }, 1.0, [2.0, 0.0, 1.0], Motion::Free)).expect("a");
+    let b = w.add_body(&body("b", ShapeDesc::Box { size: [0.1; 3] }, 1.0, [2.2, 0.0, 1.0], Motion::Free)).expect("b");
+    let fixed = w
+        .add_joint(&JointDesc {
+            name: "weld".into(),
+            body1: a,
+            body2: b,
+            kind: JointKind::Fixed,
+            anchor: [2.1, 0.0, 1.0],
+            axis: [1.0, 0.0, 0.0],
+            motor: None,
+        })
+        .expect("fixed");
+    let e = w.add_differential(jl, fixed, 1.0).expect_err("a fixed joint has no angle");
+    assert!(e.to_string().contains("weld"), "{e}");
+    assert!(w.joint_position(fixed).is_none());
+}

@@ -92,6 +92,14 @@ pub enum BuildError {
         /// Vehicle name.
         name: String,
     },
+    /// A vehicle's link reaches through a side wall of the container.
+    #[error("{key}: {message}; move it or widen [container]")]
+    VehicleOutsideContainer {
+        /// Scene key.
+        key: String,
+        /// Which vehicle and link, how far it reaches and where the wall is.
+        message: String,
+    },
     /// A rig body is not over the soil.
     #[error("no soil under ({x}, {y}): place the rig body over the soil")]
     NoSoilUnder {

@@ -1,7 +1,7 @@
 //! Vehicles in the rigid world: lowered onto the soil, their URDF joints built with wheel
 //! motors and limits.
 
-use regolith_rigid::{BodyId, JointDesc, JointId, RigidWorld};
+use regolith_rigid::{BodyId, JointDesc, JointId, Pose, RigidWorld};
 
 use super::{BuildError, SurfaceGrid};
 use crate::scene::{BodySpec, Scene, VehicleSpec};
@@ -33,6 +33,49 @@ pub fn place_vehicles(scene: &mut Scene, surface: &SurfaceGrid) -> Result<(), Bu
         }
         for li in 0..v.model.links.len() {
             scene.bodies[v.body(li)].desc.pose.translation[2] += lift;
+        }
+    }
+    check_inside_walls(scene)
+}
+
+/// Every vehicle link below the walls' tops lies between the container's side walls: one that
+/// starts through a wall is pushed out by it with the whole robot (rapier resolves the overlap
+/// at once), which no user means.
+fn check_inside_walls(scene: &Scene) -> Result<(), BuildError> {
+    let Some(c) = scene.container.as_ref().filter(|_| scene.container_walls) else { return Ok(()) };
+    for v in &scene.vehicles {
+        for (li, link) in v.model.links.iter().enumerate() {
+            let b = &scene.bodies[v.body(li)];
+            // Above the walls' tops it clears them.
+            if link.collision.is_empty() || b.desc.shape.lowest_z(&b.desc.pose) >= c.max[2] {
+                continue;
+            }
+            // The lowest point along −x, +x, −y, +y: the shape turned so that direction points down.
+            let s = std::f64::consts::FRAC_1_SQRT_2;
+            for (axis, k, q, sign) in [
+                ("x", 0, [0.0, -s, 0.0, s], 1.0),
+                ("x", 0, [0.0, s, 0.0, s], -1.0),
+                ("y", 1, [s, 0.0, 0.0, s], 1.0),
+                ("y", 1, [-s, 0.0, 0.0, s], -1.0),
+            ] {
+                let p = &b.desc.pose;
+                let turned = Pose {
+                    translation: regolith_rigid::quat_rotate(q, p.translation),
+                    rotation: regolith_rigid::quat_mul(q, p.rotation),
+                };
+                let reach = sign * b.desc.shape.lowest_z(&turned);
+                let outside = if sign > 0.0 { reach < c.min[k] } else { reach > c.max[k] };
+                if reach.is_finite() && outside {
+                    let wall = if sign > 0.0 { c.min[k] } else { c.max[k] };
+                    return Err(BuildError::VehicleOutsideContainer {
+                        key: v.key.clone(),
+                        message: format!(
+                            "vehicle \"{}\" does not fit in the container: link `{}` reaches {axis} = {reach:.3} m, beyond the wall at {wall:.3} m",
+                            v.name, link.name
+                        ),
+                    });
+                }
+            }
         }
     }
     Ok(())
@@ -76,6 +119,15 @@ pub fn build_vehicle_joints(
             _ => {}
         }
         out.push(Some(id));
+    }
+    if !v.self_collide {
+        let links: Vec<BodyId> = (0..v.model.links.len()).map(|l| ids[v.body(l)]).collect();
+        rigid.ignore_collisions_among(&links).map_err(BuildError::rigid(&v.key))?;
+    }
+    if let Some(d) = &v.differential
+        && let (Some(l), Some(r)) = (out[d.left], out[d.right])
+    {
+        rigid.add_differential(l, r, d.sign).map_err(BuildError::rigid(&v.key))?;
     }
     Ok(out)
 }

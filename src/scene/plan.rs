@@ -263,6 +263,13 @@ pub fn describe(scene: &Scene) -> String {
                 );
             }
         }
+        if let Some(d) = &v.differential {
+            let _ = writeln!(
+                s,
+                "    differential: `{}` and `{}` turn by equal and opposite angles about `{}`",
+                m.joints[d.left].name, m.joints[d.right].name, m.links[m.joints[d.left].parent].name
+            );
+        }
         for sub in &m.substitutions {
             let _ = writeln!(s, "    substitution {sub}");
         }

@@ -14,7 +14,15 @@
 //! # or  drive = { joints = { wheel_fl_joint = 2.0 }, max_torque = 10.0 }
 //! # any speed may be a profile [[t, value], ...] (piecewise linear, held after the last point);
 //! # steering = { steer_fl_joint = 15.0 } drives revolute (or non-wheel continuous) joints to an angle (deg).
+//! differential = { left = "left_rocker_joint", right = "right_rocker_joint" }
+//! self_collide = false             # default: a robot's links do not collide with one another
 //! ```
+//!
+//! `differential` couples two rocker joints on the same parent link the way a rocker-bogie
+//! rover's differential bar does: the rockers turn by equal and opposite angles relative to the
+//! body, so the body's pitch is the mean of theirs. URDF has no closed loops to say so (a
+//! Curio or Sawppy describes its bar only for Gazebo, or not at all); without it the body pivots
+//! freely on the rocker axles.
 //!
 //! "Forward" for a wheel speed means the wheel rolls the vehicle along the root link's +x,
 //! whatever the sign of the URDF joint axis.
@@ -43,6 +51,15 @@ pub(crate) struct VehicleFile {
     pub friction: Option<f64>,
     pub bce_layers: Option<i64>,
     pub drive: Option<DriveFile>,
+    pub differential: Option<DifferentialFile>,
+    pub self_collide: Option<bool>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct DifferentialFile {
+    pub left: String,
+    pub right: String,
 }
 
 #[derive(Debug, Deserialize)]
@@ -147,6 +164,24 @@ pub struct VehicleSpec {
     pub max_torque: f64,
     /// Angle profile (rad) per steering joint.
     pub steering: Vec<(usize, Profile)>,
+    /// A differential between two rocker joints (`differential`).
+    pub differential: Option<Differential>,
+    /// Whether its links collide with one another (`self_collide`, default false: as in Gazebo,
+    /// PyBullet and Isaac, a URDF's link shapes may overlap near their joints).
+    pub self_collide: bool,
+}
+
+/// Two revolute joints on one parent link held to equal and opposite angles (a rocker-bogie's
+/// differential): `θ_left + sign θ_right = 0`, `sign` being +1 when their axes point the same
+/// way and −1 when opposite.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Differential {
+    /// The left rocker's joint (index into the model's joints).
+    pub left: usize,
+    /// The right rocker's joint.
+    pub right: usize,
+    /// +1 for parallel axes, −1 for opposite ones.
+    pub sign: f64,
 }
 
 impl VehicleSpec {
@@ -383,5 +418,87 @@ pub(crate) fn resolve_vehicle(
             ),
         ));
     }
-    Ok(VehicleSpec { name, key, model, first_body, place_on_soil: z.is_none(), wheels, drive, max_torque, steering })
+    let differential = match &v.differential {
+        None => None,
+        Some(d) => Some(differential(&model, d, &find_joint, &e)?),
+    };
+    if let Some(d) = &differential {
+        for (side, ji) in [("left", d.left), ("right", d.right)] {
+            let name = &model.joints[ji].name;
+            if wheels.iter().any(|w| w.joint == ji) {
+                return Err(e(
+                    &format!("differential.{side}"),
+                    format!("joint `{name}` is a wheel joint, not a rocker"),
+                ));
+            }
+            if steering.iter().any(|(s, _)| *s == ji) {
+                return Err(e(
+                    &format!("differential.{side}"),
+                    format!("joint `{name}` is also in drive.steering: a rocker is moved by the differential only"),
+                ));
+            }
+        }
+    }
+    Ok(VehicleSpec {
+        name,
+        key,
+        model,
+        first_body,
+        place_on_soil: z.is_none(),
+        wheels,
+        drive,
+        max_torque,
+        steering,
+        differential,
+        self_collide: v.self_collide.unwrap_or(false),
+    })
+}
+
+/// Resolves `differential`: two distinct revolute or continuous joints with the same parent
+/// link and parallel (or opposite) axes.
+fn differential(
+    model: &UrdfModel,
+    d: &DifferentialFile,
+    find_joint: &dyn Fn(&str, &str) -> Result<usize, InputError>,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<Differential, InputError> {
+    let (left, right) = (find_joint("differential.left", &d.left)?, find_joint("differential.right", &d.right)?);
+    if left == right {
+        return Err(e("differential", format!("left and right are the same joint `{}`", d.left)));
+    }
+    for (side, ji) in [("left", left), ("right", right)] {
+        let j = &model.joints[ji];
+        if !matches!(j.kind, JointType::Revolute { .. } | JointType::Continuous) {
+            return Err(e(
+                &format!("differential.{side}"),
+                format!("joint `{}` is not revolute or continuous", j.name),
+            ));
+        }
+    }
+    let (jl, jr) = (&model.joints[left], &model.joints[right]);
+    if jl.parent != jr.parent {
+        return Err(e(
+            "differential",
+            format!(
+                "`{}` and `{}` must hang from the same link (the body the bar pivots on); their parents are `{}` and `{}`",
+                jl.name, jr.name, model.links[jl.parent].name, model.links[jr.parent].name
+            ),
+        ));
+    }
+    // Both axes in the parent's frame.
+    let (al, ar) = (jl.origin.rotate(jl.axis), jr.origin.rotate(jr.axis));
+    let n = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    let cos = (al[0] * ar[0] + al[1] * ar[1] + al[2] * ar[2]) / (n(al) * n(ar));
+    if cos.abs() < 0.999 {
+        return Err(e(
+            "differential",
+            format!(
+                "the axes of `{}` and `{}` must be parallel or opposite (they are {:.1}° apart)",
+                jl.name,
+                jr.name,
+                cos.clamp(-1.0, 1.0).acos().to_degrees()
+            ),
+        ));
+    }
+    Ok(Differential { left, right, sign: cos.signum() })
 }
