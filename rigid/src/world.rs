@@ -476,7 +476,7 @@ impl RigidWorld {
     /// Couples two revolute joints the way a rocker-bogie rover's differential bar couples its
     /// rockers: `θ_left + sign θ_right = 0` (`sign` +1 when their axes point the same way, −1
     /// when opposite), the angles measured from the pose the joints were made in. The bar is a
-    /// stiff, critically damped spring on that sum (see [`DIFFERENTIAL_HZ`]), applied at each
+    /// stiff (50 Hz), critically damped spring on that sum, applied at each
     /// step as equal torques on the two rockers about their axes and the opposite on the link
     /// they hang from: the pair keeps its opposite swing freely and resists only a common one.
     /// Errors if either joint is not revolute, they are the same, or they do not share a parent.
