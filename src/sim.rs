@@ -328,6 +328,21 @@ impl<T: Real> Simulation<T> {
             .collect()
     }
 
+    /// The URDF links lumped by fixed joints into each vehicle's links (sensor frames, mounts,
+    /// footprints): `(carrier body, "<vehicle>/<link>", pose in the carrier's frame)`, for `/tf`.
+    pub fn lumped_frames(&self) -> Vec<(String, String, Pose)> {
+        self.scene
+            .vehicles
+            .iter()
+            .flat_map(|v| {
+                v.model.frames.iter().map(move |f| {
+                    let carrier = format!("{}/{}", v.name, v.model.links[f.link].name);
+                    (carrier, format!("{}/{}", v.name, f.name), f.pose)
+                })
+            })
+            .collect()
+    }
+
     /// The geometry drawn in each frame of [`Self::frames`] (a URDF link's visual geometry
     /// when it has one, else its collision shape).
     pub fn frame_shapes(&self) -> Vec<(String, ShapeDesc)> {

@@ -250,7 +250,7 @@ fn the_embedded_schemas_reject_a_message_that_lacks_a_field() {
     msg.as_object_mut().expect("object").remove("data");
     assert!(schema.validate(&msg).is_err());
     let tf = jsonschema::validator_for(&foxglove::frame_transforms_schema()).expect("compiles");
-    let mut m = foxglove::frame_transforms(1.5, &[("wheel".into(), regolith_rigid::Pose::default())]);
+    let mut m = foxglove::frame_transforms(1.5, &[("wheel".into(), regolith_rigid::Pose::default())], &[]);
     assert!(tf.validate(&m).is_ok());
     m["transforms"][0]["rotation"]["w"] = serde_json::json!("one");
     assert!(tf.validate(&m).is_err());

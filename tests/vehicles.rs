@@ -588,7 +588,30 @@ fn a_vehicle_run_records_every_link_and_its_wheels() {
     let tf = &topics["/tf"][0].1["transforms"];
     let children: Vec<&str> =
         tf.as_array().expect("list").iter().map(|t| t["child_frame_id"].as_str().expect("id")).collect();
-    assert_eq!(children, ["rover/base_link", "rover/wheel_fl", "rover/wheel_fr", "rover/wheel_rl", "rover/wheel_rr"]);
+    assert_eq!(
+        children,
+        [
+            "rover/base_link",
+            "rover/wheel_fl",
+            "rover/wheel_fr",
+            "rover/wheel_rl",
+            "rover/wheel_rr",
+            "rover/mast",
+            "rover/camera"
+        ]
+    );
+    // The mast and camera head, lumped into the chassis by their fixed joints, stay frames of
+    // their own under it, at their URDF poses (the mast joint's origin, then the camera's).
+    let (mast, camera) = (&tf[5], &tf[6]);
+    assert_eq!(
+        (mast["parent_frame_id"].as_str(), camera["parent_frame_id"].as_str()),
+        (Some("rover/base_link"), Some("rover/base_link"))
+    );
+    for (frame, at) in [(mast, [0.12, 0.0, 0.04]), (camera, [0.12, 0.0, 0.04 + 0.22])] {
+        for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+            assert!((frame["translation"][axis].as_f64().expect("number") - at[k]).abs() < 1e-9, "{frame}");
+        }
+    }
     // Shapes: the URDF's visual geometry — the STL chassis and the COLLADA camera head as
     // triangle lists and the mast as a cube, all on the chassis they are lumped into; the
     // wheels as cylinders.

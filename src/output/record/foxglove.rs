@@ -312,20 +312,24 @@ pub fn point_cloud(t: f64, frame_id: &str, data: &[u8]) -> Value {
     })
 }
 
-/// A `foxglove.FrameTransforms` with each `(child, pose)` under `world`.
-pub fn frame_transforms(t: f64, frames: &[(String, Pose)]) -> Value {
+/// A `foxglove.FrameTransforms` with each `(child, pose)` under `world`, and each
+/// `(parent, child, pose)` of `under` under its parent frame (a URDF link lumped into the body
+/// that carries it).
+pub fn frame_transforms(t: f64, frames: &[(String, Pose)], under: &[(String, String, Pose)]) -> Value {
+    let transform = |parent: &str, child: &str, p: &Pose| {
+        let q = p.rotation;
+        json!({
+            "timestamp": time(t),
+            "parent_frame_id": parent,
+            "child_frame_id": child,
+            "translation": xyz(p.translation),
+            "rotation": {"x": q[0], "y": q[1], "z": q[2], "w": q[3]},
+        })
+    };
     let transforms: Vec<Value> = frames
         .iter()
-        .map(|(child, p)| {
-            let q = p.rotation;
-            json!({
-                "timestamp": time(t),
-                "parent_frame_id": "world",
-                "child_frame_id": child,
-                "translation": xyz(p.translation),
-                "rotation": {"x": q[0], "y": q[1], "z": q[2], "w": q[3]},
-            })
-        })
+        .map(|(child, p)| transform("world", child, p))
+        .chain(under.iter().map(|(parent, child, p)| transform(parent, child, p)))
         .collect();
     json!({ "transforms": transforms })
 }

@@ -5,7 +5,7 @@
 //! | topic | schema | when |
 //! |---|---|---|
 //! | `/terrain/particles` | `foxglove.PointCloud` (x, y, z, p, q, pc, speed as float32; material, and phase 0 soil / 1 water, as uint32) | every frame, unless `output.particles = false` |
-//! | `/tf` | `foxglove.FrameTransforms`, each body under `world` | every frame, when the scene has bodies |
+//! | `/tf` | `foxglove.FrameTransforms`, each body under `world`, and each URDF link lumped into a vehicle link (sensor frames, mounts) under that link | every frame, when the scene has bodies |
 //! | `/bodies/shapes` | `foxglove.SceneUpdate`, each body's geometry locked to its frame | at the start of each run (a rig run may change a shape) |
 //! | `/bodies/wrench` | `regolith.BodyWrenches` | every frame, when the scene has bodies |
 //! | `/rig/<type>` | `regolith.Rig.<type>` (slip, sinkage, drawbar pull, cone index, …) | every frame of a rig run |
@@ -184,7 +184,7 @@ impl Recorder {
         }
         let frames = sim.frames();
         if !frames.is_empty() {
-            self.write(self.channels.tf, t, &foxglove::frame_transforms(t, &frames))?;
+            self.write(self.channels.tf, t, &foxglove::frame_transforms(t, &frames, &sim.lumped_frames()))?;
         }
         let wrenches = sim.fsi_wrenches();
         if !wrenches.is_empty() {
