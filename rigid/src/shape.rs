@@ -244,6 +244,19 @@ impl ShapeDesc {
             }
         }
     }
+
+    /// The shape's world extent at `pose` along x and y (m): `[[min x, max x], [min y, max y]]`,
+    /// each the lowest point of the shape turned so that that direction points down
+    /// ([`Self::lowest_z`] of the pose turned a quarter turn about y or x); `±∞` for an empty
+    /// compound.
+    pub fn horizontal_extent(&self, pose: &Pose) -> [[f64; 2]; 2] {
+        let s = std::f64::consts::FRAC_1_SQRT_2;
+        // A quarter turn about y by ∓90° takes ±x to −z; about x by ±90°, ±y to −z.
+        let lowest = |q: [f64; 4]| {
+            self.lowest_z(&Pose { translation: quat_rotate(q, pose.translation), rotation: quat_mul(q, pose.rotation) })
+        };
+        [[lowest([0.0, -s, 0.0, s]), -lowest([0.0, s, 0.0, s])], [lowest([s, 0.0, 0.0, s]), -lowest([-s, 0.0, 0.0, s])]]
+    }
 }
 
 impl ShapeDesc {
@@ -462,6 +475,26 @@ fn oriented_trimesh(vertices: &[[f64; 3]], indices: &[[u32; 3]]) -> Option<TriMe
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn horizontal_extent_of_a_turned_box_and_a_wheel() {
+        // A 0.4 × 0.2 × 0.1 box at (1, 2, 3) turned 30° about z: its half-extents along x and y
+        // are ½(a cos θ + b sin θ) and ½(a sin θ + b cos θ).
+        let b = ShapeDesc::Box { size: [0.4, 0.2, 0.1] };
+        let pose = Pose::from_rpy_deg([1.0, 2.0, 3.0], [0.0, 0.0, 30.0]);
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let (hx, hy) = (0.5 * (0.4 * c + 0.2 * s), 0.5 * (0.4 * s + 0.2 * c));
+        let e = b.horizontal_extent(&pose);
+        for (got, want) in e.iter().flatten().zip([1.0 - hx, 1.0 + hx, 2.0 - hy, 2.0 + hy]) {
+            assert!((got - want).abs() < 1e-12, "{e:?}");
+        }
+        // A wheel (axle along y) reaches its radius along x and half its width along y.
+        let w = ShapeDesc::Wheel { radius: 0.1, width: 0.04, grousers: None };
+        let e = w.horizontal_extent(&Pose::translation([0.0, 0.5, 0.2]));
+        for (got, want) in e.iter().flatten().zip([-0.1, 0.1, 0.48, 0.52]) {
+            assert!((got - want).abs() < 1e-12, "{e:?}");
+        }
+    }
 
     #[test]
     fn containment_of_primitives_and_meshes() {

@@ -313,3 +313,41 @@ fn a_differential_needs_two_distinct_revolute_joints() {
     assert!(e.to_string().contains("weld"), "{e}");
     assert!(w.joint_position(fixed).is_none());
 }
+
+#[test]
+fn bodies_that_ignore_collisions_among_themselves_still_meet_the_rest() {
+    // Two boxes overlapping by 5 cm along x and a third overlapping the second by 5 cm along z
+    // (clear of the first), no gravity: rapier pushes overlapping bodies apart, except the two
+    // made to ignore each other.
+    let make = |ignore: bool| {
+        let mut w = RigidWorld::new([0.0; 3]);
+        let at = [[0.0, 0.0, 0.0], [0.15, 0.0, 0.0], [0.25, 0.0, 0.15]];
+        let ids: Vec<_> = at
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                w.add_body(&body(&format!("b{i}"), ShapeDesc::Box { size: [0.2; 3] }, 1.0, *p, Motion::Free))
+                    .expect("body")
+            })
+            .collect();
+        if ignore {
+            w.ignore_collisions_among(&ids[..2]).expect("a group");
+        }
+        for _ in 0..50 {
+            w.step(1e-3);
+        }
+        let x = |i: usize| w.state(ids[i]).origin;
+        (x(1)[0] - x(0)[0], x(2)[2] - x(1)[2])
+    };
+    let (apart, above) = make(false);
+    assert!(apart > 0.16 && above > 0.16, "all three collide: {apart}, {above}");
+    let (apart, above) = make(true);
+    assert!((apart - 0.15).abs() < 1e-6, "the pair ignores its overlap: {apart}");
+    assert!(above > 0.16, "the third body still pushes the second away: {above}");
+
+    let mut w = RigidWorld::new([0.0; 3]);
+    for _ in 0..32 {
+        w.ignore_collisions_among(&[]).expect("32 groups");
+    }
+    assert!(w.ignore_collisions_among(&[]).expect_err("33rd").to_string().contains("more than 32"));
+}

@@ -1,7 +1,7 @@
 //! Vehicles in the rigid world: lowered onto the soil, their URDF joints built with wheel
 //! motors and limits.
 
-use regolith_rigid::{BodyId, JointDesc, JointId, Pose, RigidWorld};
+use regolith_rigid::{BodyId, JointDesc, JointId, RigidWorld};
 
 use super::{BuildError, SurfaceGrid};
 use crate::scene::{BodySpec, Scene, VehicleSpec};
@@ -50,23 +50,17 @@ fn check_inside_walls(scene: &Scene) -> Result<(), BuildError> {
             if link.collision.is_empty() || b.desc.shape.lowest_z(&b.desc.pose) >= c.max[2] {
                 continue;
             }
-            // The lowest point along −x, +x, −y, +y: the shape turned so that direction points down.
-            let s = std::f64::consts::FRAC_1_SQRT_2;
-            for (axis, k, q, sign) in [
-                ("x", 0, [0.0, -s, 0.0, s], 1.0),
-                ("x", 0, [0.0, s, 0.0, s], -1.0),
-                ("y", 1, [s, 0.0, 0.0, s], 1.0),
-                ("y", 1, [-s, 0.0, 0.0, s], -1.0),
-            ] {
-                let p = &b.desc.pose;
-                let turned = Pose {
-                    translation: regolith_rigid::quat_rotate(q, p.translation),
-                    rotation: regolith_rigid::quat_mul(q, p.rotation),
+            let extent = b.desc.shape.horizontal_extent(&b.desc.pose);
+            for (k, axis) in [(0, "x"), (1, "y")] {
+                let [low, high] = extent[k];
+                let beyond = if low < c.min[k] {
+                    Some((low, c.min[k]))
+                } else if high > c.max[k] {
+                    Some((high, c.max[k]))
+                } else {
+                    None
                 };
-                let reach = sign * b.desc.shape.lowest_z(&turned);
-                let outside = if sign > 0.0 { reach < c.min[k] } else { reach > c.max[k] };
-                if reach.is_finite() && outside {
-                    let wall = if sign > 0.0 { c.min[k] } else { c.max[k] };
+                if let Some((reach, wall)) = beyond {
                     return Err(BuildError::VehicleOutsideContainer {
                         key: v.key.clone(),
                         message: format!(
