@@ -13,7 +13,7 @@ use std::path::Path;
 use quick_xml::Reader;
 use quick_xml::events::{BytesStart, Event};
 
-use crate::mesh_io::{MeshError, TriangleMesh, err};
+use crate::mesh::{MeshError, TriangleMesh, err};
 
 #[derive(Default)]
 struct Primitive {

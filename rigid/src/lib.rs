@@ -9,12 +9,14 @@
 #![warn(missing_docs)]
 
 pub mod bench;
+mod mesh;
 mod mesh_io;
 mod shape;
 mod world;
 
 pub mod dae;
-pub use mesh_io::{MeshError, TriangleMesh, load_mesh};
+pub use mesh::{MeshError, TriangleMesh};
+pub use mesh_io::load_mesh;
 pub use regolith_body::BodyState;
 pub use shape::{Axis, Grousers, Pose, ShapeDesc, quat_mul, quat_rotate};
 pub use world::{

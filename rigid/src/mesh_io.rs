@@ -1,32 +1,9 @@
 //! Triangle meshes from files: STL (ASCII or binary), Wavefront OBJ (`v` and `f` records;
 //! polygons are fanned into triangles) and COLLADA `.dae` (see [`crate::dae`]). Errors name the file and, for text formats, the line.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// A mesh file could not be used.
-#[derive(Debug, thiserror::Error)]
-#[error("{}{}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
-pub struct MeshError {
-    /// The file.
-    pub path: PathBuf,
-    /// 1-based line, for text formats.
-    pub line: Option<usize>,
-    /// What is wrong.
-    pub message: String,
-}
-
-/// A triangle mesh (m).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct TriangleMesh {
-    /// Vertices.
-    pub vertices: Vec<[f64; 3]>,
-    /// Triangles.
-    pub indices: Vec<[u32; 3]>,
-}
-
-pub(crate) fn err(path: &Path, line: Option<usize>, message: impl Into<String>) -> MeshError {
-    MeshError { path: path.to_path_buf(), line, message: message.into() }
-}
+use crate::mesh::{MeshError, TriangleMesh, err};
 
 /// Loads `.stl`, `.obj` or `.dae`, scaling every coordinate by `scale` (per axis).
 pub fn load_mesh(path: &Path, scale: [f64; 3]) -> Result<TriangleMesh, MeshError> {
@@ -156,6 +133,8 @@ fn obj(path: &Path, b: &[u8]) -> Result<TriangleMesh, MeshError> {
 
 #[cfg(test)]
 mod tests {
+    use std::path::PathBuf;
+
     use super::*;
 
     fn tmp(name: &str, bytes: &[u8]) -> PathBuf {

@@ -18,7 +18,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use crate::input::{InputError, read_text};
-use crate::output::plot::DRAWS_PLOTS;
+use crate::output::DRAWS_PLOTS;
 use crate::study::StudyError;
 use crate::study::stability::case_files;
 use crate::sweep::{Plan, Record, read_all, run_local};

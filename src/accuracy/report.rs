@@ -7,7 +7,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::analysis::{CaseResult, Row, TOLERANCES};
-use crate::output::plot::{Figure, Panel, Series, write_figure};
+use crate::output::plot::{Figure, Panel, Series};
+use crate::output::write_figure;
 use crate::study::StudyError;
 
 /// The columns of `accuracy.csv`.

@@ -27,9 +27,8 @@ use serde::Serialize;
 
 use super::CommandError;
 use super::fit::{FitError, line};
-use super::target::{TargetRun, TargetSettings, calibrate_to_target, write_calibrated};
-use crate::input::{InputError, read_text};
-use crate::material::load_material_file;
+use super::target::{TargetRun, TargetSettings, calibrate_to_target, material_table, write_calibrated};
+use crate::input::InputError;
 use crate::output::plot::{Figure, Panel, Series};
 use crate::output::write_figure;
 use crate::scene::{Precision, load_scene};
@@ -623,13 +622,6 @@ pub struct ReposeReport {
     pub calibration: Option<TargetRun>,
     /// The calibrated material file, when the loop converged.
     pub calibrated_material: Option<String>,
-}
-
-/// Reads a material file as a table, after checking it through the material loader.
-pub fn material_table(path: &Path) -> Result<toml::Table, InputError> {
-    load_material_file(path)?;
-    let text = read_text(path)?;
-    toml::from_str(&text).map_err(|e| InputError::file(path, e.to_string()))
 }
 
 /// Runs the test, analyses the pile, writes `repose.json`, `particles.csv` (every particle at

@@ -13,7 +13,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::CommandError;
-use super::repose::material_table;
+use crate::input::{InputError, read_text};
 use crate::material::load_material_file;
 
 /// One evaluation of the loop.
@@ -289,6 +289,13 @@ pub fn write_calibrated(base: &Path, set: &[(&str, f64)], why: &str, out: &Path)
     std::fs::write(out, text).map_err(|e| CommandError::Output(format!("cannot write {}: {e}", out.display())))?;
     load_material_file(out)?;
     Ok(out.display().to_string())
+}
+
+/// Reads a material file as a table, after checking it through the material loader.
+pub fn material_table(path: &Path) -> Result<toml::Table, InputError> {
+    load_material_file(path)?;
+    let text = read_text(path)?;
+    toml::from_str(&text).map_err(|e| InputError::file(path, e.to_string()))
 }
 
 #[cfg(test)]

@@ -39,7 +39,7 @@ use serde::{Deserialize, Serialize};
 use super::CommandError;
 use super::fit::{MohrCoulomb, mohr_coulomb, mohr_coulomb_cohesionless};
 use super::lowpass::{Failure, FailureKind, FilterKind, LowPass, first_peak, plateau};
-use super::repose::material_table;
+use super::target::material_table;
 use super::target::{
     JointRun, JointSettings, TargetRun, TargetSettings, calibrate_jointly, calibrate_to_target, write_calibrated,
 };

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Parser;
 
+use super::ray::{check_ray_flags, run_module};
 use super::{
     BatchRunArgs, Cli, Command, Failure, FailureArg, FilterArg, MatchArg, PlateArgs, Precision, StabilityArgs,
     TriaxialArgs,
@@ -136,25 +137,6 @@ pub(super) fn threads_only(r: &BatchRunArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Refuses `--jobs` on the Ray runner and CPU / GPU counts that are not numbers > 0 (≥ 0 GPUs).
-pub(super) fn check_ray_flags(
-    jobs: Option<usize>,
-    num_cpus: Option<f64>,
-    num_gpus: Option<f64>,
-) -> Result<(), Failure> {
-    if jobs.is_some() {
-        return Err(InputError::flag("--jobs", "applies to --runner threads only (Ray takes --num-cpus)").into());
-    }
-    for (flag, v) in [("--num-cpus", num_cpus), ("--num-gpus", num_gpus)] {
-        if v.is_some_and(|x| !(x.is_finite() && x >= 0.0) || (flag == "--num-cpus" && x == 0.0)) {
-            return Err(InputError::flag(flag, "must be a number > 0 (--num-gpus: >= 0)").into());
-        }
-    }
-    Ok(())
-}
-
-/// Hands the command (this process's own arguments) to the Python package's Ray runner
-/// (`regolith.batch`) and passes its exit code on.
 /// A triaxial calibration loop (`--target-phi`, `--target-c`) is no batch: its rounds run
 /// one after another.
 pub(super) fn no_loop_on_ray(a: &TriaxialArgs) -> Result<(), Failure> {
@@ -168,29 +150,12 @@ pub(super) fn no_loop_on_ray(a: &TriaxialArgs) -> Result<(), Failure> {
     }
 }
 
+/// Hands the command (this process's own arguments) to the Python package's Ray runner
+/// (`regolith.batch`) and passes its exit code on.
 pub(super) fn ray(r: &BatchRunArgs, what: &str) -> Result<(), Failure> {
     check_ray_flags(r.jobs, r.num_cpus, r.num_gpus)?;
-    let python = std::env::var(super::sweep::PYTHON_ENV).unwrap_or_else(|_| "python3".into());
-    let script = concat!(
-        "import sys\n",
-        "try:\n",
-        "    import regolith.batch as b\n",
-        "except ImportError as e:\n",
-        "    print('error: --runner ray: ' + str(e) + ' (install the Python package and Ray: pip install ./python ray; or pass --runner threads)', file=sys.stderr)\n",
-        "    sys.exit(2)\n",
-        "sys.exit(b.main(sys.argv[1:]))\n"
-    );
-    let status = std::process::Command::new(&python)
-        .arg("-c")
-        .arg(script)
-        .args(std::env::args().skip(1))
-        .status()
-        .map_err(|e| {
-            InputError::flag(
-                "--runner",
-                format!("ray: cannot start {python} ({e}); set {} to a Python with the regolith package and ray, or pass --runner threads", super::sweep::PYTHON_ENV),
-            )
-        })?;
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (python, status) = run_module("batch", &args)?;
     match status.code() {
         Some(0) => Ok(()),
         Some(c @ (1 | 2)) => Err(Failure::Reported(c as u8)),
@@ -264,7 +229,7 @@ pub fn open(args: &[String]) -> Result<Batch, Failure> {
             no_loop_on_ray(&a)?;
             let inp = a.inputs()?;
             inp.settings.check().map_err(|(flag, msg)| InputError::flag(flag, msg))?;
-            let material = crate::calibrate::repose::material_table(&inp.material)?;
+            let material = crate::calibrate::target::material_table(&inp.material)?;
             let plan = TriaxialPlan::new(&material, &inp.settings, &inp.out).map_err(super::calibrate::failure)?;
             Ok(Batch::Triaxial(inp, plan))
         }

@@ -7,6 +7,7 @@ mod calibrate;
 mod check;
 mod element;
 mod inspect;
+mod ray;
 mod run;
 mod study;
 mod sweep;

@@ -4,12 +4,10 @@
 
 use std::path::Path;
 
+use super::ray::{check_ray_flags, run_module};
 use super::{DesignArg, Failure, RunnerArg, SweepArgs};
 use crate::input::InputError;
 use crate::sweep::{Design, Plan, Shard, merge as merge_dir, parse_vary, run_local};
-
-/// The Python interpreter the Ray runner is started with: `REGOLITH_PYTHON`, else `python3`.
-pub const PYTHON_ENV: &str = "REGOLITH_PYTHON";
 
 pub(super) fn converge(dir: &Path, over: &str, metric: &str) -> Result<(), Failure> {
     let ladders = crate::sweep::converge(dir, over, metric)?;
@@ -108,7 +106,7 @@ pub(super) fn run(a: SweepArgs) -> Result<(), Failure> {
             Ok(())
         }
         RunnerArg::Ray => {
-            super::batch::check_ray_flags(a.jobs, a.num_cpus, a.num_gpus)?;
+            check_ray_flags(a.jobs, a.num_cpus, a.num_gpus)?;
             ray(&a, shard)
         }
     }
@@ -116,20 +114,7 @@ pub(super) fn run(a: SweepArgs) -> Result<(), Failure> {
 
 /// Starts `python -m regolith.sweep` with the sweep's arguments and passes its exit code on.
 fn ray(a: &SweepArgs, shard: Option<Shard>) -> Result<(), Failure> {
-    let python = std::env::var(PYTHON_ENV).unwrap_or_else(|_| "python3".into());
-    let mut args: Vec<String> = vec![
-        "-c".into(),
-        concat!(
-            "import sys\n",
-            "try:\n",
-            "    import regolith.sweep as s\n",
-            "except ImportError as e:\n",
-            "    print('error: --runner ray: ' + str(e) + ' (install the Python package and Ray: pip install ./python ray; or pass --runner threads)', file=sys.stderr)\n",
-            "    sys.exit(2)\n",
-            "sys.exit(s.main(sys.argv[1:]))\n"
-        )
-        .into(),
-    ];
+    let mut args: Vec<String> = Vec::new();
     let scene = a.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
     args.push(scene);
     for v in &a.vary {
@@ -163,12 +148,7 @@ fn ray(a: &SweepArgs, shard: Option<Shard>) -> Result<(), Failure> {
         args.push("--quiet".into());
     }
     args.extend(["--out".into(), a.out.display().to_string()]);
-    let status = std::process::Command::new(&python).args(&args).status().map_err(|e| {
-        InputError::flag(
-            "--runner",
-            format!("ray: cannot start {python} ({e}); set {PYTHON_ENV} to a Python with the regolith package and ray, or pass --runner threads"),
-        )
-    })?;
+    let (python, status) = run_module("sweep", &args)?;
     match status.code() {
         Some(0) => Ok(()),
         Some(2) => Err(Failure::Reported(2)),

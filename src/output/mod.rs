@@ -3,6 +3,7 @@
 //! the run loop; the rest is written once at the end.
 
 pub mod element_plot;
+pub mod figure_file;
 pub mod figures;
 pub mod json;
 pub mod particles;
@@ -13,9 +14,10 @@ pub mod record;
 mod render;
 pub mod series;
 
+pub use figure_file::{DRAWS_PLOTS, write_figure};
 pub use json::write_json;
 pub use particles::{ParticleRow, particle_row, write_particles_csv};
-pub use plot::{Figure, Panel, PlotError, write_figure};
+pub use plot::{Figure, Panel, PlotError};
 #[cfg(feature = "mcap")]
 pub use record::Recorder;
 pub use series::{Series, TerrainSeries};

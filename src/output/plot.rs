@@ -1,7 +1,7 @@
 //! Plots written by Regolith runs: PNG and SVG from the same description, with an embedded
 //! DejaVu Sans font so that no system font (and no fontconfig) is needed.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// How a series is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,21 +70,4 @@ pub struct PlotError {
     pub path: PathBuf,
     /// Why.
     pub message: String,
-}
-
-/// Whether this build draws plots (the `plots` feature).
-pub const DRAWS_PLOTS: bool = cfg!(feature = "plots");
-
-/// Writes `dir/stem.png` and `dir/stem.svg` and returns their paths; a build without the
-/// `plots` feature writes nothing and returns no path (see [`DRAWS_PLOTS`]).
-pub fn write_figure(fig: &Figure, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
-    #[cfg(feature = "plots")]
-    {
-        super::render::write_figure(fig, dir, stem)
-    }
-    #[cfg(not(feature = "plots"))]
-    {
-        let _ = (fig, dir, stem);
-        Ok(Vec::new())
-    }
 }

@@ -125,7 +125,7 @@ fn draw_figure<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, fig: &Figure) -
 }
 
 /// Draws `dir/stem.png` and `dir/stem.svg`; returns their paths.
-pub(super) fn write_figure(fig: &Figure, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
+pub(super) fn draw(fig: &Figure, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
     register_fonts();
     let w = 560 * fig.panels.len().max(1) as u32;
     let h = 480;

@@ -14,9 +14,9 @@ use std::path::PathBuf;
 use regolith_fsi::Real;
 
 use crate::driver::{Driver, Observer, Progress};
+use crate::output::DRAWS_PLOTS;
 #[cfg(feature = "mcap")]
 use crate::output::Recorder;
-use crate::output::plot::DRAWS_PLOTS;
 use crate::output::{TerrainSeries, figures, write_figure, write_json, write_particles_csv};
 use crate::scene::{Precision, Scene};
 use crate::sim::Simulation;

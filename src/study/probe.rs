@@ -43,7 +43,7 @@ pub struct Fastest {
     pub position: [f64; 3],
 }
 
-/// Measures a scene's runs for [`crate::study::stability`].
+/// Measures a scene's runs for the stability study (`stability.rs`).
 #[derive(Clone, Debug, Default)]
 pub struct Probe {
     runs: Vec<RunFigures>,

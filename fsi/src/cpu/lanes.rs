@@ -1,11 +1,12 @@
-//! The fused pair sums of one soil particle ([`super::rates::soil_rates`]), eight neighbours
-//! at a time.
+//! The fused pair sums of one soil particle, [`LANES`] neighbours at a time: the `f32` path
+//! of the rate pass (`rates.rs`).
 //!
 //! The scalar loop ([`PairSums::add`]) keeps about thirty accumulators live, more than the
 //! sixteen vector registers of x86-64 hold, and runs one latency-bound chain per pair. Here
 //! a block of up to [`LANES`] neighbours is first gathered into structure-of-arrays form
 //! (the separation, the relative velocity and the neighbour's fields, one array each), then
-//! one branch-free loop over the lanes does every pair's arithmetic, which the compiler turns
+//! one branch-free loop over the lanes evaluates [`super::pair::pair_terms`] (the same
+//! definition the scalar loop calls) for every lane, which the compiler turns
 //! into packed SIMD (four f32 or two f64 lanes per SSE instruction on the generic x86-64
 //! target), with lane-wise accumulators summed once at the end.
 //!
@@ -21,7 +22,7 @@ use crate::Real;
 use crate::kernel::Kernel;
 use crate::math::{Mat3, Sym3, Vec3};
 
-use super::rates::{Packed, PairConsts, PairSums};
+use super::pair::{Neighbour, Packed, PairConsts, PairSums, pair_terms};
 
 /// Neighbours per block.
 pub(crate) const LANES: usize = 16;
@@ -131,71 +132,44 @@ impl<T: Real> Acc<T> {
         pa: &Packed<T>,
         b: &Block<T>,
     ) {
-        let sa = pa.s;
         for l in 0..LANES {
-            let (rx, ry, rz) = (b.r[0][l], b.r[1][l], b.r[2][l]);
-            let (vx, vy, vz) = (b.v[0][l], b.v[1][l], b.v[2][l]);
-            let r2 = rx * rx + ry * ry + rz * rz;
-            let rr = r2.sqrt();
-            let f = K::grad_factor(rr, c.inv_h, c.alpha);
-            let (gx, gy, gz) = (rx * f, ry * f, rz * f);
-            let vol = b.vol[l];
-            self.drho[l] += vol * (vx * gx + vy * gy + vz * gz);
-            // The momentum pair term (S_a + S_b) ∇W − Π ∇W of `rates::pair_term`.
-            let sxx = sa.xx + b.s[0][l];
-            let syy = sa.yy + b.s[1][l];
-            let szz = sa.zz + b.s[2][l];
-            let sxy = sa.xy + b.s[3][l];
-            let sxz = sa.xz + b.s[4][l];
-            let syz = sa.yz + b.s[5][l];
-            let mut tx = sxx * gx + sxy * gy + sxz * gz;
-            let mut ty = sxy * gx + syy * gy + syz * gz;
-            let mut tz = sxz * gx + syz * gy + szz * gz;
-            if VISC {
-                let vr = (vx * rx + vy * ry + vz * rz).min(T::zero());
-                let pi = -c.visc_alpha * (pa.cs + b.cs[l]) * (c.h * vr) / ((r2 + c.eta2) * (pa.rho + b.rho[l]));
-                tx -= gx * pi;
-                ty -= gy * pi;
-                tz -= gz * pi;
+            let nb = Neighbour {
+                r: Vec3::new(b.r[0][l], b.r[1][l], b.r[2][l]),
+                v: Vec3::new(b.v[0][l], b.v[1][l], b.v[2][l]),
+                s: Sym3::new(b.s[0][l], b.s[1][l], b.s[2][l], b.s[3][l], b.s[4][l], b.s[5][l]),
+                vol: b.vol[l],
+                mass: b.mass[l],
+                rho: b.rho[l],
+                cs: b.cs[l],
+            };
+            let t = pair_terms::<T, K, VISC, XSPH, PPST, FS, SOIL>(c, pa, &nb);
+            self.drho[l] += t.drho;
+            self.acc[0][l] += t.acc.x;
+            self.acc[1][l] += t.acc.y;
+            self.acc[2][l] += t.acc.z;
+            for (i, row) in t.l.m.iter().enumerate() {
+                for (j, x) in row.iter().enumerate() {
+                    self.l[3 * i + j][l] += *x;
+                }
             }
-            let mass = b.mass[l];
-            self.acc[0][l] += tx * mass;
-            self.acc[1][l] += ty * mass;
-            self.acc[2][l] += tz * mass;
-            // L_ij = Σ V_b (v_b − v_a)_i ∂_j W
-            let (mx, my, mz) = (vx * -vol, vy * -vol, vz * -vol);
-            self.l[0][l] += mx * gx;
-            self.l[1][l] += mx * gy;
-            self.l[2][l] += mx * gz;
-            self.l[3][l] += my * gx;
-            self.l[4][l] += my * gy;
-            self.l[5][l] += my * gz;
-            self.l[6][l] += mz * gx;
-            self.l[7][l] += mz * gy;
-            self.l[8][l] += mz * gz;
             if FS {
                 if !SOIL {
-                    self.near[l] |= r2 < c.support2;
+                    self.near[l] |= t.inside;
                 }
-                let k = -vol * f;
-                self.fs[0][l] += k * rx * rx;
-                self.fs[1][l] += k * ry * ry;
-                self.fs[2][l] += k * rz * rz;
-                self.fs[3][l] += k * rx * ry;
-                self.fs[4][l] += k * rx * rz;
-                self.fs[5][l] += k * ry * rz;
+                let f = t.fs;
+                for (k, x) in [f.xx, f.yy, f.zz, f.xy, f.xz, f.yz].into_iter().enumerate() {
+                    self.fs[k][l] += x;
+                }
             }
             if XSPH && SOIL {
-                let w = K::w(rr, c.inv_h, c.alpha);
-                let k = T::of(2.0) * mass / (pa.rho + b.rho[l]) * w;
-                self.xs[0][l] -= vx * k;
-                self.xs[1][l] -= vy * k;
-                self.xs[2][l] -= vz * k;
+                self.xs[0][l] += t.xs.x;
+                self.xs[1][l] += t.xs.y;
+                self.xs[2][l] += t.xs.z;
             }
             if PPST {
-                self.gc[0][l] += gx * vol;
-                self.gc[1][l] += gy * vol;
-                self.gc[2][l] += gz * vol;
+                self.gc[0][l] += t.gc.x;
+                self.gc[1][l] += t.gc.y;
+                self.gc[2][l] += t.gc.z;
             }
         }
     }
@@ -296,7 +270,7 @@ mod tests {
                 if n_markers == 1 { vec![Packed { x: Vec3::new(2.2 * h, 0.0, 0.0), ..markers[0] }] } else { markers };
             let sm: Vec<u32> = (0..n_markers as u32).collect();
             let a = neighbour_sums::<f32, K, true, true, true, true>(&c, &pa, &ss, &sm, &soil, &markers);
-            let b = super::super::rates::neighbour_sums::<f32, K, true, true, true, true>(
+            let b = super::super::pair::neighbour_sums::<f32, K, true, true, true, true>(
                 &c, &pa, &ss, &sm, &soil, &markers,
             );
             assert_eq!(a.contact, b.contact, "{n_soil} soil, {n_markers} markers");

@@ -18,6 +18,7 @@ mod grid;
 mod lanes;
 mod memory;
 mod neighbors;
+mod pair;
 mod rates;
 mod region;
 mod wet;
@@ -43,7 +44,8 @@ use regolith_body::BodyState;
 
 use grid::{CellIndexer, CellSort};
 use neighbors::{NeighborList, TargetGroup};
-use rates::{Packed, PairConsts, Rate};
+use pair::{Packed, PairConsts};
+use rates::Rate;
 
 /// Scratch buffers for permutations, one per element type.
 #[derive(Default)]

@@ -1,35 +1,17 @@
 //! The rate evaluation of one stage: boundary-marker extrapolation, then one fused pass over
 //! each soil particle's neighbours giving the density rate, acceleration, velocity gradient,
 //! XSPH correction, shifting gradient and free-surface measure; then the Jaumann stress rate.
-//!
-//! Pair terms are written so that the (a, b) and (b, a) evaluations are exact negatives of
-//! each other (same operands in the same order), which is what makes the soil's internal
-//! forces cancel to round-off and the marker forces equal and opposite to what the soil feels.
+//! The pair arithmetic itself is [`super::pair`]'s.
 
 use rayon::prelude::*;
 
 use crate::Real;
 use crate::kernel::Kernel;
-use crate::math::{Mat3, Sym3, Vec3};
+use crate::math::{Sym3, Vec3};
 use crate::rheology::{Material, Moduli, PointState, jaumann_rate};
 
 use super::neighbors::NeighborList;
-
-/// What a neighbour contributes, packed into one record per particle so that a pair loop reads
-/// one contiguous 64-byte (f32) record per neighbour.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Packed<T> {
-    pub x: Vec3<T>,
-    pub v: Vec3<T>,
-    /// σ / ρ² (Pa m⁶/kg²).
-    pub s: Sym3<T>,
-    /// m / ρ (m³).
-    pub vol: T,
-    pub mass: T,
-    pub rho: T,
-    /// Elastic wave speed (m/s).
-    pub cs: T,
-}
+use super::pair::{Packed, PairConsts, momentum, neighbour_sums};
 
 /// Per-particle rates of one stage.
 #[derive(Clone, Copy, Debug, Default)]
@@ -51,34 +33,6 @@ pub(crate) struct Rate<T> {
     pub contact: bool,
     /// Moduli the stress rate used.
     pub moduli: Moduli<T>,
-}
-
-/// Constants of the pair loops.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct PairConsts<T> {
-    pub h: T,
-    pub inv_h: T,
-    pub alpha: T,
-    pub support2: T,
-    pub visc_alpha: T,
-    pub eta2: T,
-    pub gravity: Vec3<T>,
-}
-
-#[cfg(test)]
-impl<T: Real> PairConsts<T> {
-    /// The constants the pair-loop tests use: support 2h, α = 0.5, η² = 0.01 h², no gravity.
-    pub(crate) fn for_test<K: Kernel<T>>(h: T) -> Self {
-        Self {
-            h,
-            inv_h: T::one() / h,
-            alpha: K::alpha(h),
-            support2: T::of(4.0) * h * h,
-            visc_alpha: T::of(0.5),
-            eta2: T::of(0.01) * h * h,
-            gravity: Vec3::zero(),
-        }
-    }
 }
 
 /// The soil state a stage reads.
@@ -259,30 +213,6 @@ pub(crate) fn extrapolate_markers<T: Real, K: Kernel<T>, S: Fn(usize) -> Option<
     });
 }
 
-/// The momentum pair term `(S_a + S_b) ∇W − Π ∇W` with `S = σ/ρ²` and Monaghan's artificial
-/// viscosity on approaching pairs. Exactly antisymmetric under swapping a and b.
-#[inline(always)]
-fn pair_term<T: Real, const VISC: bool>(
-    c: &PairConsts<T>,
-    pa: &Packed<T>,
-    pb: &Packed<T>,
-    r: Vec3<T>,
-    r2: T,
-    gw: Vec3<T>,
-    vab: Vec3<T>,
-) -> Vec3<T> {
-    let mut ga = (pa.s + pb.s).mul_vec(gw);
-    if VISC {
-        // Π = −α c̄ μ / ρ̄ with μ = h v·r / (r² + η²) on approaching pairs (v·r < 0), 0 else;
-        // c̄ and ρ̄ are pair means, so Π = −α (c_a + c_b) h min(v·r, 0) / ((r² + η²)(ρ_a + ρ_b)):
-        // one division, and no branch (half the pairs approach, at random).
-        let vr = vab.dot(r).min(T::zero());
-        let pi = -c.visc_alpha * (pa.cs + pb.cs) * (c.h * vr) / ((r2 + c.eta2) * (pa.rho + pb.rho));
-        ga -= gw * pi;
-    }
-    ga
-}
-
 /// Soil rates for all particles. `XSPH` and `PPST` select the optional sums at compile time;
 /// `FS` adds the free-surface moment matrix (needed at the first stage of a step only).
 #[allow(clippy::too_many_arguments)]
@@ -325,101 +255,6 @@ pub(crate) fn soil_rates<
             out.contact = sums.contact;
         }
     });
-}
-
-/// Sums over one soil particle's neighbours (`ss`: soil, `sm`: markers), one pair at a time
-/// (for `f64`; `f32` takes [`super::lanes::neighbour_sums`]). Sums in locals, each neighbour
-/// kind in its own inlined loop: the compiler keeps the accumulators in registers instead of
-/// calling a closure per pair.
-#[inline(always)]
-pub(crate) fn neighbour_sums<
-    T: Real,
-    K: Kernel<T>,
-    const VISC: bool,
-    const XSPH: bool,
-    const PPST: bool,
-    const FS: bool,
->(
-    c: &PairConsts<T>,
-    pa: &Packed<T>,
-    ss: &[u32],
-    sm: &[u32],
-    soil: &[Packed<T>],
-    markers: &[Packed<T>],
-) -> PairSums<T> {
-    let mut sums = PairSums::default();
-    for &b in ss {
-        sums.add::<K, VISC, XSPH, PPST, FS, true>(c, pa, &soil[b as usize]);
-    }
-    for &w in sm {
-        sums.add::<K, VISC, XSPH, PPST, FS, false>(c, pa, &markers[w as usize]);
-    }
-    sums
-}
-
-/// What one soil particle's neighbours add up to (see [`soil_rates`]).
-#[derive(Clone, Copy, Default)]
-pub(crate) struct PairSums<T> {
-    pub drho: T,
-    pub acc: Vec3<T>,
-    /// Velocity gradient L.
-    pub l: Mat3<T>,
-    pub xs: Vec3<T>,
-    pub gc: Vec3<T>,
-    pub fs: Sym3<T>,
-    pub contact: bool,
-}
-
-impl<T: Real> PairSums<T> {
-    /// Adds neighbour `pb` (a soil particle with `SOIL`, else a marker) of `pa`; nothing when
-    /// it is outside the support.
-    #[inline(always)]
-    pub(crate) fn add<
-        K: Kernel<T>,
-        const VISC: bool,
-        const XSPH: bool,
-        const PPST: bool,
-        const FS: bool,
-        const SOIL: bool,
-    >(
-        &mut self,
-        c: &PairConsts<T>,
-        pa: &Packed<T>,
-        pb: &Packed<T>,
-    ) {
-        let r = pa.x - pb.x;
-        let r2 = r.norm2();
-        if r2 >= c.support2 {
-            return;
-        }
-        let rr = r2.sqrt();
-        let f = K::grad_factor(rr, c.inv_h, c.alpha);
-        let gw = r * f;
-        let vab = pa.v - pb.v;
-        self.drho += pb.vol * vab.dot(gw);
-        self.acc += pair_term::<T, VISC>(c, pa, pb, r, r2, gw, vab) * pb.mass;
-        // L_ij = Σ V_b (v_b − v_a)_i ∂_j W
-        let mv = vab * (-pb.vol);
-        for (row, vi) in self.l.m.iter_mut().zip([mv.x, mv.y, mv.z]) {
-            row[0] += vi * gw.x;
-            row[1] += vi * gw.y;
-            row[2] += vi * gw.z;
-        }
-        if FS {
-            self.contact |= !SOIL;
-            // (x_b − x_a) ⊗ ∇W = −F r ⊗ r: symmetric for a radial kernel.
-            let k = -pb.vol * f;
-            self.fs +=
-                Sym3::new(k * r.x * r.x, k * r.y * r.y, k * r.z * r.z, k * r.x * r.y, k * r.x * r.z, k * r.y * r.z);
-        }
-        if XSPH && SOIL {
-            let w = K::w(rr, c.inv_h, c.alpha);
-            self.xs -= vab * (T::of(2.0) * pb.mass / (pa.rho + pb.rho) * w);
-        }
-        if PPST {
-            self.gc += gw * pb.vol;
-        }
-    }
 }
 
 /// Force (N) on each touched marker (row `k` of `nl_ms`, record `markers[k]`) from the soil:
@@ -480,7 +315,7 @@ pub(crate) fn marker_pair<T: Real, K: Kernel<T>, const VISC: bool>(
     }
     let gw = r * K::grad_factor(r2.sqrt(), c.inv_h, c.alpha);
     let vab = pa.v - pw.v;
-    pair_term::<T, VISC>(c, pa, pw, r, r2, gw, vab) * (pa.mass * pw.mass)
+    momentum::<T, VISC>(c, pa, (pw.s, pw.rho, pw.cs), r, r2, gw, vab) * (pa.mass * pw.mass)
 }
 
 #[cfg(test)]

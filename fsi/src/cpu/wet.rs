@@ -56,7 +56,8 @@ use crate::math::{Mat3, Sym3, Vec3};
 use crate::rheology::{MIN_POROSITY, Material, Moduli, Rheology, STANDARD_GRAVITY, Water, jaumann_rate};
 
 use super::neighbors::NeighborList;
-use super::rates::{Packed, PairConsts, PairSums, Rate};
+use super::pair::{Packed, PairConsts, PairSums};
+use super::rates::Rate;
 
 /// The water of a wet scene (one water material): what every backend's coupling passes need.
 #[derive(Clone, Copy, Debug)]
