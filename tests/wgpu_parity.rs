@@ -848,12 +848,14 @@ fn regolith(args: &[&str]) -> (i32, String, String) {
 #[test]
 fn every_example_scene_runs_on_wgpu_from_the_cli() {
     for (scene, sets) in [
-        ("cone_penetrometer.toml", vec!["--set", "simulation.end_time=0.004"]),
-        ("single_wheel.toml", vec!["--set", "simulation.end_time=0.004", "--slips", "0.3"]),
-        ("rover.toml", vec!["--set", "simulation.end_time=0.004"]),
-        ("cone_probe.toml", vec!["--set", "simulation.end_time=0.002"]),
-        ("slope.toml", vec!["--set", "simulation.end_time=0.002"]),
-        ("column_collapse_tall.toml", vec!["--set", "simulation.end_time=0.002"]),
+        // One exchange each (two for the cones): what is checked is that each scene builds,
+        // steps and writes its outputs on wgpu; lavapipe takes 0.1–1 s a step.
+        ("cone_penetrometer.toml", vec!["--set", "simulation.end_time=0.001"]),
+        ("single_wheel.toml", vec!["--set", "simulation.end_time=0.001", "--slips", "0.3"]),
+        ("rover.toml", vec!["--set", "simulation.end_time=0.001"]),
+        ("cone_probe.toml", vec!["--set", "simulation.end_time=0.001"]),
+        ("slope.toml", vec!["--set", "simulation.end_time=0.001"]),
+        ("column_collapse_tall.toml", vec!["--set", "simulation.end_time=0.001"]),
     ] {
         let out = common::out_dir(&format!("wgpu_cli_{scene}"));
         let path = format!("{}/examples/scenes/{scene}", env!("CARGO_MANIFEST_DIR"));
@@ -898,7 +900,7 @@ fn saturated_scenes_run_on_wgpu_with_either_drag() {
             "--out",
             &o,
             "--set",
-            "simulation.end_time=0.002",
+            "simulation.end_time=0.001",
             "--set",
             &set_drag,
         ];
@@ -927,16 +929,18 @@ fn saturated_scenes_run_on_wgpu_with_either_drag() {
 
 /// Steady seepage through the filter-stone column (`regolith study darcy`, d0 = 2 cm) on wgpu
 /// (f32) against the CPU (f64): the Darcy flux within 1 % with the SVF drag (measured
-/// −0.03 %) and 2 % with the per-particle one (measured +0.8 %: its drag switches on whole as
-/// a soil particle enters a water particle's support, so f32 round-off moves it more), and no
-/// soil through the filter on either. At d0 = 1 cm (docs/two_phase.md, not in CI: 4 minutes
-/// on lavapipe) the wgpu run reads +9.52 % against k Δh / L and −1.43 % against k i, the
-/// CPU's +9.39 % and −1.35 %.
+/// −0.03 %), and no soil through the filter on either. The per-particle drag is checked
+/// against its CPU twin kernel by kernel (`wet_kernels_match_their_cpu_twins_with_either_drag`)
+/// and runs the saturated collapse on wgpu below; its whole seepage run against the CPU read
+/// +0.8 % (bound 2 %: its drag switches on whole as a soil particle enters a water particle's
+/// support, so f32 round-off moves it more) and is left out of the suite for time (110 s on
+/// lavapipe). At d0 = 1 cm (docs/two_phase.md, not in CI: 4 minutes on lavapipe) the wgpu run
+/// reads +9.52 % against k Δh / L and −1.43 % against k i, the CPU's +9.39 % and −1.35 %.
 #[test]
 fn darcy_seepage_on_wgpu_matches_the_cpu() {
     use regolith::study::darcy::darcy_point_on;
     use regolith_fsi::config::Drag;
-    for (drag, tol) in [(Drag::Svf, 0.01), (Drag::Particle, 0.02)] {
+    for (drag, tol) in [(Drag::Svf, 0.01)] {
         let c = darcy_point_on(0.02, drag, Backend::Cpu).unwrap_or_else(|e| panic!("{e}"));
         let g = darcy_point_on(0.02, drag, Backend::Wgpu).unwrap_or_else(|e| panic!("{e}"));
         eprintln!(
