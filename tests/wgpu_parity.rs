@@ -940,17 +940,13 @@ fn saturated_scenes_run_on_wgpu_with_either_drag() {
 fn darcy_seepage_on_wgpu_matches_the_cpu() {
     use regolith::study::darcy::darcy_point_on;
     use regolith_fsi::config::Drag;
-    for (drag, tol) in [(Drag::Svf, 0.01)] {
-        let c = darcy_point_on(0.02, drag, Backend::Cpu).unwrap_or_else(|e| panic!("{e}"));
-        let g = darcy_point_on(0.02, drag, Backend::Wgpu).unwrap_or_else(|e| panic!("{e}"));
-        eprintln!(
-            "{drag:?}: cpu q = {:.4e} m/s ({:.1} s), wgpu q = {:.4e} m/s ({:.1} s)",
-            c.q, c.wall_s, g.q, g.wall_s
-        );
-        assert_eq!(g.backend, "wgpu");
-        assert!((g.q / c.q - 1.0).abs() < tol, "{drag:?}: wgpu q = {:.4e} m/s against the cpu's {:.4e}", g.q, c.q);
-        assert_eq!((c.escaped, g.escaped), (0, 0), "{drag:?}: the soil stays on the filter");
-    }
+    let (drag, tol) = (Drag::Svf, 0.01);
+    let c = darcy_point_on(0.02, drag, Backend::Cpu).unwrap_or_else(|e| panic!("{e}"));
+    let g = darcy_point_on(0.02, drag, Backend::Wgpu).unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("{drag:?}: cpu q = {:.4e} m/s ({:.1} s), wgpu q = {:.4e} m/s ({:.1} s)", c.q, c.wall_s, g.q, g.wall_s);
+    assert_eq!(g.backend, "wgpu");
+    assert!((g.q / c.q - 1.0).abs() < tol, "{drag:?}: wgpu q = {:.4e} m/s against the cpu's {:.4e}", g.q, c.q);
+    assert_eq!((c.escaped, g.escaped), (0, 0), "{drag:?}: the soil stays on the filter");
 }
 
 #[test]
@@ -986,4 +982,35 @@ fn auto_says_which_backend_it_chose() {
     let real = regolith::build::backend::real_gpu().is_some();
     assert_eq!(s["backend"], if real { "wgpu" } else { "cpu" }, "{line}");
     assert!(line.contains(if real { "wgpu" } else { "cpu" }), "{line}");
+}
+
+/// A kernel's error reaches the caller as the CPU twin's error: one particle of a resting bed
+/// given a velocity that is not finite stops both backends at their first step with the same
+/// error (the code the device stores comes from `DeviceError`, one enum for WGSL and host).
+#[test]
+fn a_non_finite_particle_stops_both_backends_with_the_same_error() {
+    let text = "[simulation]\nend_time = 0.01\nprecision = \"f32\"\n[sph]\nspacing = 0.02\n\
+        [[materials]]\nname = \"sand\"\nmodel = \"drucker-prager\"\ndensity = 1600\nyoungs_modulus = 2e6\npoisson_ratio = 0.3\nfriction_angle = 30.0\n\
+        [container]\nmin = [0.0, 0.0, 0.0]\nmax = [0.2, 0.1, 0.2]\n[terrain]\nmaterial = \"sand\"\ndepth = 0.06\n";
+    let scene = common::scene(text);
+    let (mats, mut terrain) = scene_terrain::<f32>(&scene).expect("terrain");
+    let k = terrain.particles.len() / 2;
+    terrain.particles[k].vel = [f64::NAN, 0.0, 0.0];
+    let mut cfg = scene.solver;
+    cfg.time_step = TimeStep::Fixed(2e-4);
+    let d = device().expect("a wgpu adapter (lavapipe in CI)");
+    let mut cpu = CpuSph::new(cfg, mats.clone(), &terrain.particles, &terrain.markers, terrain.domain).expect("cpu");
+    let mut gpu =
+        GpuSph::new(&d.device, &d.queue, &d.name, cfg, mats, &terrain.particles, &terrain.markers, terrain.domain)
+            .expect("gpu");
+    let ec = cpu.step(None).expect_err("the cpu must refuse a NaN velocity");
+    let eg = SphSolver::step(&mut gpu, None).expect_err("wgpu must refuse a NaN velocity");
+    // The particle's index in each backend's order may differ; the kind and the quantity may not.
+    let kind = |e: &regolith_fsi::SolverError| match e {
+        regolith_fsi::SolverError::NonFinite { step, what, .. } => format!("non-finite {what} at step {step}"),
+        regolith_fsi::SolverError::Rheology { step, source, .. } => format!("rheology {source} at step {step}"),
+        other => format!("{other}"),
+    };
+    eprintln!("cpu: {ec}\nwgpu: {eg}");
+    assert_eq!(kind(&eg), kind(&ec), "cpu: {ec}; wgpu: {eg}");
 }

@@ -17,6 +17,7 @@
 #![warn(missing_docs)]
 
 mod active;
+mod error_code;
 mod kernels;
 mod layout;
 mod shader;

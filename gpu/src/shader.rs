@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 
 use crate::GpuError;
+use crate::error_code::DeviceError;
 use regolith_fsi::config::RAREFIED_DENSITY;
 use regolith_fsi::cpu::DELTA_SPH;
 use regolith_fsi::rheology::MIN_POROSITY;
@@ -98,6 +99,7 @@ pub(crate) fn source(e: &Effects, v: &Variant, kernel: &str, with_rheology: bool
     let _ = writeln!(s, "const STRIDE: u32 = {}u;", v.stride.max(1));
     let _ = writeln!(s, "const LEN: u32 = {}u;", v.len.max(1));
     let _ = writeln!(s, "const BLOCKS: u32 = {}u;", v.len.max(1).div_ceil(512));
+    s.push_str(&DeviceError::wgsl_constants());
     s.push_str(COMMON);
     s.push_str(MATERIALS);
     if with_rheology {

@@ -10,11 +10,12 @@ use regolith_fsi::config::{
 use regolith_fsi::cpu::{ActiveRegion, GridSpec, WetSetup, lattice_sums};
 use regolith_fsi::kernel::{CubicSpline, Kernel, WendlandC2};
 use regolith_fsi::math::{Sym3, Vec3};
-use regolith_fsi::rheology::{Material, PointState, Rheology, RheologyError};
+use regolith_fsi::rheology::{Material, PointState, Rheology};
 use regolith_fsi::{BodyMarkers, BodyState, MarkerInit, ParticleInit, SolverError, SphSolver, StepReport};
 
 use crate::GpuError;
 use crate::active::{ActiveParts, Shared, Sizes};
+use crate::error_code::DeviceError;
 use crate::kernels::{
     advance::Advance, bodies::Bodies, dispatch, extrapolate::Extrapolate, forces::Forces, pack::Pack, permute::Permute,
     rates::Rates, scan::Scan, sort::Sort, step_info::StepInfo, wet::Wet,
@@ -248,21 +249,6 @@ fn gpu_material(m: &Material<f32>) -> layout::Material {
         g.grain_por = m.grain_density;
     }
     g
-}
-
-fn rheology_error(code: u32) -> RheologyError {
-    match code {
-        1 => RheologyError::NonFinite { model: "elastic", stage: "trial stress" },
-        2 => RheologyError::NonFinite { model: "drucker-prager", stage: "trial stress" },
-        3 => RheologyError::NonFinite { model: "mcc", stage: "trial state" },
-        4 => RheologyError::InvalidState { model: "mcc", what: "p_c must be positive" },
-        5 => RheologyError::InvalidState {
-            model: "mcc",
-            what: "elastic moduli must be positive for a plastic correction",
-        },
-        6 => RheologyError::NoConvergence { model: "mcc", stage: "return mapping" },
-        _ => RheologyError::NonFinite { model: "mcc", stage: "return mapping" },
-    }
 }
 
 /// A particle record from its initial state.
@@ -981,11 +967,9 @@ impl GpuSph {
         self.uncovered = info.uncovered != 0;
         if info.err_code != 0 {
             let (step, particle) = (self.steps, info.err_id);
-            return Err(match info.err_code {
-                8 => SolverError::NonFinite { step, time, particle, what: "position" },
-                9 => SolverError::NonFinite { step, time, particle, what: "velocity" },
-                10 => SolverError::NonFinite { step, time, particle, what: "density" },
-                c => SolverError::Rheology { step, time, particle, source: rheology_error(c) },
+            return Err(match DeviceError::from_code(info.err_code) {
+                Some(e) => e.into_solver_error(step, time, particle),
+                None => SolverError::Setup(format!("wgpu: unknown kernel error code {}", info.err_code)),
             });
         }
         if !(dt.is_finite() && dt > 0.0) {

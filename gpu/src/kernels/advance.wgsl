@@ -15,16 +15,7 @@
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 @group(0) @binding(5) var<storage, read_write> info: Info;
 
-const ERR_ELASTIC_NONFINITE: u32 = 1u;
-const ERR_DP_NONFINITE: u32 = 2u;
-const ERR_MCC_NONFINITE_TRIAL: u32 = 3u;
-const ERR_MCC_PC: u32 = 4u;
-const ERR_MCC_MODULI: u32 = 5u;
-const ERR_MCC_NO_CONVERGENCE: u32 = 6u;
-const ERR_MCC_NONFINITE_RESULT: u32 = 7u;
-const ERR_POSITION: u32 = 8u;
-const ERR_VELOCITY: u32 = 9u;
-const ERR_DENSITY: u32 = 10u;
+// The error codes are written before the common module from `DeviceError` (error_code.rs).
 
 struct Corrected { s: Sym, pc: f32, sv: f32 }
 
