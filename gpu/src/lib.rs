@@ -20,6 +20,7 @@ mod active;
 mod error_code;
 mod kernels;
 mod layout;
+mod neighbour_loop;
 mod shader;
 mod solver;
 

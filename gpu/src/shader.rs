@@ -171,8 +171,9 @@ pub(crate) fn bind(
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &e })
 }
 
-/// Compiles `source` and builds one pipeline per entry point, all over `layout`; a WGSL or
-/// validation error comes back as [`GpuError::Shader`].
+/// Compiles `source` (its `for_each_in_reach` statements expanded, see
+/// [`crate::neighbour_loop`]) and builds one pipeline per entry point, all over `layout`; a
+/// malformed statement, a WGSL or a validation error comes back as [`GpuError::Shader`].
 pub(crate) fn pipelines(
     device: &wgpu::Device,
     label: &str,
@@ -180,6 +181,8 @@ pub(crate) fn pipelines(
     layout: &wgpu::BindGroupLayout,
     entries: &[&str],
 ) -> Result<Vec<wgpu::ComputePipeline>, GpuError> {
+    let source = crate::neighbour_loop::expand(source)
+        .map_err(|e| GpuError::Shader { kernel: label.to_owned(), message: e.to_string() })?;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),

@@ -29,24 +29,18 @@ fn extrapolate(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = cell_coords(xw);
     if (c.x >= 0) {
         let rc = reach_of(c);
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = start[cell_linear(ix, iy, rc.z0)];
-                let b = start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var j = a; j < b; j++) {
-                    let pa = packed[j];
-                    let r = xw - packed_x(pa);
-                    let r2 = dot(r, r);
-                    if (r2 >= prm.support2) { continue; }
-                    let w = kernel_w(sqrt(r2), prm.inv_h, prm.alpha);
-                    sw += w;
-                    sv += packed_v(pa) * w;
-                    ss = sym_add(ss, sym_scale(load_sigma(parts[j]), w));
-                    srr += r * (pa.rho * w);
-                    srho += pa.rho * w;
-                    scs += pa.cs * w;
-                }
-            }
+        for_each_in_reach(j, start, rc) {
+            let pa = packed[j];
+            let r = xw - packed_x(pa);
+            let r2 = dot(r, r);
+            if (r2 >= prm.support2) { continue; }
+            let w = kernel_w(sqrt(r2), prm.inv_h, prm.alpha);
+            sw += w;
+            sv += packed_v(pa) * w;
+            ss = sym_add(ss, sym_scale(load_sigma(parts[j]), w));
+            srr += r * (pa.rho * w);
+            srho += pa.rho * w;
+            scs += pa.cs * w;
         }
     }
     let vb = vec3<f32>(mk.vx, mk.vy, mk.vz);

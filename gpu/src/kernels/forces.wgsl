@@ -20,22 +20,16 @@ fn marker_forces(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = cell_coords(xw);
     if (c.x >= 0) {
         let rc = reach_of(c);
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = start[cell_linear(ix, iy, rc.z0)];
-                let b = start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var j = a; j < b; j++) {
-                    // Extended (frozen) soil is a neighbour of the soil, not a load on markers.
-                    if ((parts[j].flags & FLAG_FROZEN) != 0u) { continue; }
-                    let pa = packed[j];
-                    let r = packed_x(pa) - xw;
-                    let r2 = dot(r, r);
-                    if (r2 >= prm.support2) { continue; }
-                    let gw = r * kernel_grad_factor(sqrt(r2), prm.inv_h, prm.alpha);
-                    let vab = packed_v(pa) - packed_v(pw);
-                    f -= pair_term(pa, pw, r, r2, gw, vab) * (pa.mass * pw.mass);
-                }
-            }
+        for_each_in_reach(j, start, rc) {
+            // Extended (frozen) soil is a neighbour of the soil, not a load on markers.
+            if ((parts[j].flags & FLAG_FROZEN) != 0u) { continue; }
+            let pa = packed[j];
+            let r = packed_x(pa) - xw;
+            let r2 = dot(r, r);
+            if (r2 >= prm.support2) { continue; }
+            let gw = r * kernel_grad_factor(sqrt(r2), prm.inv_h, prm.alpha);
+            let vab = packed_v(pa) - packed_v(pw);
+            f -= pair_term(pa, pw, r, r2, gw, vab) * (pa.mass * pw.mass);
         }
     }
     let o = m_order[k];

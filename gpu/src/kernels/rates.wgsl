@@ -2,8 +2,8 @@
 // density rate, acceleration, velocity gradient (hence D and the Jaumann stress rate), XSPH
 // correction, concentration gradient and, at the first stage (FS), the free-surface measure
 // (smallest eigenvalue of sum V_b (x_b - x_a) (x) grad W), the surface flags and the pair count.
-// Neighbours are visited in the CPU's order (columns x then y, each a contiguous z range of
-// cell-sorted records), so the sums round the same way. CPU twin: `rates::soil_rates`.
+// Neighbours come from for_each_in_reach (the CPU's visiting order, see neighbour_loop.rs), so
+// the sums round the same way. CPU twin: `rates::soil_rates`.
 
 @group(0) @binding(0) var<uniform> prm: Params;
 @group(0) @binding(1) var<storage, read> packed: array<Packed>;
@@ -27,32 +27,20 @@ fn soil_rates(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = cell_coords(xa);
     if (c.x >= 0) {
         let rc = reach_of(c);
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = start[cell_linear(ix, iy, rc.z0)];
-                let b = start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var j = a; j < b; j++) {
-                    if (j == i) { continue; }
-                    let pb = packed[j];
-                    let d = xa - packed_x(pb);
-                    if (dot(d, d) >= prm.radius2) { continue; }
-                    pairs++;
-                    visit(&s, pa, pb, true);
-                }
-            }
+        for_each_in_reach(j, start, rc) {
+            if (j == i) { continue; }
+            let pb = packed[j];
+            let d = xa - packed_x(pb);
+            if (dot(d, d) >= prm.radius2) { continue; }
+            pairs++;
+            visit(&s, pa, pb, true);
         }
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = m_start[cell_linear(ix, iy, rc.z0)];
-                let b = m_start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var j = a; j < b; j++) {
-                    let pb = m_packed[j];
-                    let d = xa - packed_x(pb);
-                    if (dot(d, d) >= prm.radius2) { continue; }
-                    near_markers++;
-                    visit(&s, pa, pb, false);
-                }
-            }
+        for_each_in_reach(j, m_start, rc) {
+            let pb = m_packed[j];
+            let d = xa - packed_x(pb);
+            if (dot(d, d) >= prm.radius2) { continue; }
+            near_markers++;
+            visit(&s, pa, pb, false);
         }
     }
     // L_ij = sum V_b (v_b - v_a)_i d_j W; D = sym(L), spin = skew(L).

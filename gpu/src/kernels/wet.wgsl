@@ -14,7 +14,7 @@
 //   wet_marker_forces  minus all of that on each marker                     (`wet::wet_marker_forces`)
 // and `init_water` (the water's partial density and mass at the start, `CpuSph::init_water`) and
 // `water_stress` (a water particle's stress is its pore pressure after a step) around them.
-// Neighbours are visited in the CPU's order (columns x then y, each a contiguous z range), so
+// Neighbours come from for_each_in_reach (the CPU's visiting order, see neighbour_loop.rs), so
 // sums round alike. Each entry point has its own bind group layout with the bindings it uses.
 
 @group(0) @binding(0) var<uniform> prm: Params;
@@ -132,23 +132,17 @@ fn marker_solids(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = cell_coords(xw);
     if (c.x >= 0) {
         let rc = reach_of(c);
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = start[cell_linear(ix, iy, rc.z0)];
-                let b = start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var j = a; j < b; j++) {
-                    if (pore[j].water != 0u) { continue; }
-                    let pa = packed[j];
-                    let r = xw - packed_x(pa);
-                    let r2 = dot(r, r);
-                    if (r2 >= prm.support2) { continue; }
-                    let w = kernel_w(sqrt(r2), prm.inv_h, prm.alpha);
-                    sw += w;
-                    sf += pore[j].vg / pa.vol * w;
-                    sk += pore[j].inv_k * w;
-                    sv += packed_v(pa) * w;
-                }
-            }
+        for_each_in_reach(j, start, rc) {
+            if (pore[j].water != 0u) { continue; }
+            let pa = packed[j];
+            let r = xw - packed_x(pa);
+            let r2 = dot(r, r);
+            if (r2 >= prm.support2) { continue; }
+            let w = kernel_w(sqrt(r2), prm.inv_h, prm.alpha);
+            sw += w;
+            sf += pore[j].vg / pa.vol * w;
+            sk += pore[j].inv_k * w;
+            sv += packed_v(pa) * w;
         }
     }
     let perm = owner_perm[mk.owner];
@@ -176,53 +170,41 @@ fn porosity(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = cell_coords(xa);
     if (c.x >= 0) {
         let rc = reach_of(c);
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = start[cell_linear(ix, iy, rc.z0)];
-                let b = start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var j = a; j < b; j++) {
-                    if (j == i) { continue; }
-                    let pb = packed[j];
-                    let r = xa - packed_x(pb);
-                    let r2 = dot(r, r);
-                    if (r2 >= prm.support2) { continue; }
-                    let rr = sqrt(r2);
-                    let w = kernel_w(rr, prm.inv_h, prm.alpha);
-                    let wb = pore[j].water;
-                    if (wb == water) {
-                        // (v_b - v_a) (x) r V_b F: the own-phase velocity gradient.
-                        let u = packed_v(pb) - packed_v(pa);
-                        let v = r * (pb.vol * kernel_grad_factor(rr, prm.inv_h, prm.alpha));
-                        g0 += v * u.x;
-                        g1 += v * u.y;
-                        g2 += v * u.z;
-                    }
-                    if (wb != 0u) {
-                        vw += pb.vol * w;
-                    } else {
-                        solid += pore[j].vg * w;
-                        vs += pb.vol * w;
-                    }
-                }
+        for_each_in_reach(j, start, rc) {
+            if (j == i) { continue; }
+            let pb = packed[j];
+            let r = xa - packed_x(pb);
+            let r2 = dot(r, r);
+            if (r2 >= prm.support2) { continue; }
+            let rr = sqrt(r2);
+            let w = kernel_w(rr, prm.inv_h, prm.alpha);
+            let wb = pore[j].water;
+            if (wb == water) {
+                // (v_b - v_a) (x) r V_b F: the own-phase velocity gradient.
+                let u = packed_v(pb) - packed_v(pa);
+                let v = r * (pb.vol * kernel_grad_factor(rr, prm.inv_h, prm.alpha));
+                g0 += v * u.x;
+                g1 += v * u.y;
+                g2 += v * u.z;
+            }
+            if (wb != 0u) {
+                vw += pb.vol * w;
+            } else {
+                solid += pore[j].vg * w;
+                vs += pb.vol * w;
             }
         }
         if (water != 0u) {
-            for (var ix = rc.x0; ix <= rc.x1; ix++) {
-                for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                    let a = m_start[cell_linear(ix, iy, rc.z0)];
-                    let b = m_start[cell_linear(ix, iy, rc.z1) + 1u];
-                    for (var k = a; k < b; k++) {
-                        let mp = m_pore[k];
-                        if (mp.permeable != 0u) { continue; }
-                        let r = xa - marker_x(markers[k]);
-                        let r2 = dot(r, r);
-                        if (r2 >= prm.support2) { continue; }
-                        let w = kernel_w(sqrt(r2), prm.inv_h, prm.alpha);
-                        solid += mp.vg * w;
-                        // Markers drag the water where they hold soil.
-                        if (mp.inv_k > 0.0) { vs += prm.m_volume * w; }
-                    }
-                }
+            for_each_in_reach(k, m_start, rc) {
+                let mp = m_pore[k];
+                if (mp.permeable != 0u) { continue; }
+                let r = xa - marker_x(markers[k]);
+                let r2 = dot(r, r);
+                if (r2 >= prm.support2) { continue; }
+                let w = kernel_w(sqrt(r2), prm.inv_h, prm.alpha);
+                solid += mp.vg * w;
+                // Markers drag the water where they hold soil.
+                if (mp.inv_k > 0.0) { vs += prm.m_volume * w; }
             }
         }
     }
@@ -270,21 +252,15 @@ fn soil_pressures(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = cell_coords(xa);
     if (c.x >= 0) {
         let rc = reach_of(c);
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = start[cell_linear(ix, iy, rc.z0)];
-                let b = start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var j = a; j < b; j++) {
-                    if (j == i || pore[j].water == 0u) { continue; }
-                    let pb = packed[j];
-                    let r = xa - packed_x(pb);
-                    let r2 = dot(r, r);
-                    if (r2 >= prm.support2) { continue; }
-                    let w = pb.vol * kernel_w(sqrt(r2), prm.inv_h, prm.alpha);
-                    sw += w;
-                    sp += pore[j].p * w;
-                }
-            }
+        for_each_in_reach(j, start, rc) {
+            if (j == i || pore[j].water == 0u) { continue; }
+            let pb = packed[j];
+            let r = xa - packed_x(pb);
+            let r2 = dot(r, r);
+            if (r2 >= prm.support2) { continue; }
+            let w = pb.vol * kernel_w(sqrt(r2), prm.inv_h, prm.alpha);
+            sw += w;
+            sp += pore[j].p * w;
         }
     }
     var p = 0.0;
@@ -336,36 +312,30 @@ fn wet_extrapolate(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = cell_coords(xw);
     if (c.x >= 0) {
         let rc = reach_of(c);
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = start[cell_linear(ix, iy, rc.z0)];
-                let b = start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var j = a; j < b; j++) {
-                    let pa = packed[j];
-                    let r = xw - packed_x(pa);
-                    let r2 = dot(r, r);
-                    if (r2 >= prm.support2) { continue; }
-                    let w = kernel_w(sqrt(r2), prm.inv_h, prm.alpha);
-                    let q = pore[j];
-                    if (q.water == 0u) {
-                        let rho_step = pa.rho - prm.w_rest * q.vg / pa.vol * q.sat;
-                        sw += w;
-                        sv += packed_v(pa) * w;
-                        ss = sym_add(ss, sym_scale(load_sigma(parts[j]), w));
-                        srr += r * (rho_step * w);
-                        srho += pa.rho * w;
-                        scs += pa.cs * w;
-                    } else {
-                        ww += w;
-                        wv += packed_v(pa) * w;
-                        ws += -q.p * w;
-                        wrr += r * ((pa.rho / q.n) * w);
-                        wrho += pa.rho * w;
-                        wcs += pa.cs * w;
-                        pp += q.p * w;
-                        pr += r * w;
-                    }
-                }
+        for_each_in_reach(j, start, rc) {
+            let pa = packed[j];
+            let r = xw - packed_x(pa);
+            let r2 = dot(r, r);
+            if (r2 >= prm.support2) { continue; }
+            let w = kernel_w(sqrt(r2), prm.inv_h, prm.alpha);
+            let q = pore[j];
+            if (q.water == 0u) {
+                let rho_step = pa.rho - prm.w_rest * q.vg / pa.vol * q.sat;
+                sw += w;
+                sv += packed_v(pa) * w;
+                ss = sym_add(ss, sym_scale(load_sigma(parts[j]), w));
+                srr += r * (rho_step * w);
+                srho += pa.rho * w;
+                scs += pa.cs * w;
+            } else {
+                ww += w;
+                wv += packed_v(pa) * w;
+                ws += -q.p * w;
+                wrr += r * ((pa.rho / q.n) * w);
+                wrho += pa.rho * w;
+                wcs += pa.cs * w;
+                pp += q.p * w;
+                pr += r * w;
             }
         }
     }
@@ -397,69 +367,57 @@ fn wet_rates(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = cell_coords(xa);
     if (c.x >= 0) {
         let rc = reach_of(c);
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = start[cell_linear(ix, iy, rc.z0)];
-                let b = start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var j = a; j < b; j++) {
-                    if (j == i) { continue; }
-                    let pb = packed[j];
-                    let d = xa - packed_x(pb);
-                    if (dot(d, d) >= prm.radius2) { continue; }
-                    pairs++;
-                    let qb = pore[j];
-                    if (qb.water == qa.water) {
-                        visit(&s, pa, pb, true);
-                        if (a_water) {
-                            if (prm.w_mu > 0.0) { f += laminar(pa, pb); }
-                            diffusion += density_diffusion(pa, pb, pa.rho / qa.n, pb.rho / qb.n);
-                        }
-                    } else {
-                        let gb = rows_of(qb);
-                        let g = Rows(ga.r0 + gb.r0, ga.r1 + gb.r1, ga.r2 + gb.r2);
-                        var k: vec4<f32>;
-                        if (a_water) {
-                            k = coupling(pa, pb, true, qa.p - qb.p, qa.cw, qb.vg, qb.inv_k, qa.inv_sum, g);
-                        } else {
-                            k = coupling(pa, pb, false, qb.p - qa.p, qb.cw, qa.vg, qa.inv_k, qb.inv_sum, g);
-                        }
-                        f += k.xyz;
-                        drag += k.w;
-                    }
+        for_each_in_reach(j, start, rc) {
+            if (j == i) { continue; }
+            let pb = packed[j];
+            let d = xa - packed_x(pb);
+            if (dot(d, d) >= prm.radius2) { continue; }
+            pairs++;
+            let qb = pore[j];
+            if (qb.water == qa.water) {
+                visit(&s, pa, pb, true);
+                if (a_water) {
+                    if (prm.w_mu > 0.0) { f += laminar(pa, pb); }
+                    diffusion += density_diffusion(pa, pb, pa.rho / qa.n, pb.rho / qb.n);
                 }
+            } else {
+                let gb = rows_of(qb);
+                let g = Rows(ga.r0 + gb.r0, ga.r1 + gb.r1, ga.r2 + gb.r2);
+                var k: vec4<f32>;
+                if (a_water) {
+                    k = coupling(pa, pb, true, qa.p - qb.p, qa.cw, qb.vg, qb.inv_k, qa.inv_sum, g);
+                } else {
+                    k = coupling(pa, pb, false, qb.p - qa.p, qb.cw, qa.vg, qa.inv_k, qb.inv_sum, g);
+                }
+                f += k.xyz;
+                drag += k.w;
             }
         }
         let zero = Rows(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = m_start[cell_linear(ix, iy, rc.z0)];
-                let b = m_start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var k = a; k < b; k++) {
-                    var rec = m_packed[k];
-                    if (a_water) { rec = m_packed_w[k]; }
-                    let d = xa - packed_x(rec);
-                    let d2 = dot(d, d);
-                    if (d2 >= prm.radius2) { continue; }
-                    pairs++;
-                    let mp = m_pore[k];
-                    // Water passes through a permeable owner's markers.
-                    if (a_water && mp.permeable != 0u) { continue; }
-                    if (d2 < prm.support2) { contact = true; }
-                    visit(&s, pa, rec, false);
-                    // The marker as the other phase: soil moving with the soil beside it for
-                    // the water, the extrapolated pore pressure for the soil.
-                    var wall = rec;
-                    wall.vx = mp.vx; wall.vy = mp.vy; wall.vz = mp.vz;
-                    var q: vec4<f32>;
-                    if (a_water) {
-                        q = coupling(pa, wall, true, qa.p - mp.p, qa.cw, mp.vg, mp.inv_k, qa.inv_sum, zero);
-                    } else {
-                        q = coupling(pa, wall, false, mp.p - qa.p, 0.0, qa.vg, 0.0, 0.0, zero);
-                    }
-                    f += q.xyz;
-                    drag += q.w;
-                }
+        for_each_in_reach(k, m_start, rc) {
+            var rec = m_packed[k];
+            if (a_water) { rec = m_packed_w[k]; }
+            let d = xa - packed_x(rec);
+            let d2 = dot(d, d);
+            if (d2 >= prm.radius2) { continue; }
+            pairs++;
+            let mp = m_pore[k];
+            // Water passes through a permeable owner's markers.
+            if (a_water && mp.permeable != 0u) { continue; }
+            if (d2 < prm.support2) { contact = true; }
+            visit(&s, pa, rec, false);
+            // The marker as the other phase: soil moving with the soil beside it for
+            // the water, the extrapolated pore pressure for the soil.
+            var wall = rec;
+            wall.vx = mp.vx; wall.vy = mp.vy; wall.vz = mp.vz;
+            var q: vec4<f32>;
+            if (a_water) {
+                q = coupling(pa, wall, true, qa.p - mp.p, qa.cw, mp.vg, mp.inv_k, qa.inv_sum, zero);
+            } else {
+                q = coupling(pa, wall, false, mp.p - qa.p, 0.0, qa.vg, 0.0, 0.0, zero);
             }
+            f += q.xyz;
+            drag += q.w;
         }
     }
     let l0 = s.l0;
@@ -505,34 +463,28 @@ fn wet_marker_forces(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = cell_coords(xw);
     if (c.x >= 0) {
         let rc = reach_of(c);
-        for (var ix = rc.x0; ix <= rc.x1; ix++) {
-            for (var iy = rc.y0; iy <= rc.y1; iy++) {
-                let a = start[cell_linear(ix, iy, rc.z0)];
-                let b = start[cell_linear(ix, iy, rc.z1) + 1u];
-                for (var j = a; j < b; j++) {
-                    let q = pore[j];
-                    let water = q.water != 0u;
-                    if (water && mp.permeable != 0u) { continue; }
-                    let pa = packed[j];
-                    var pw = ws;
-                    if (water) { pw = ww; }
-                    let r = packed_x(pa) - xw;
-                    let r2 = dot(r, r);
-                    if (r2 >= prm.support2) { continue; }
-                    let gw = r * kernel_grad_factor(sqrt(r2), prm.inv_h, prm.alpha);
-                    let vab = packed_v(pa) - packed_v(pw);
-                    f -= pair_term(pa, pw, r, r2, gw, vab) * (pa.mass * pw.mass);
-                    var wall = pw;
-                    wall.vx = mp.vx; wall.vy = mp.vy; wall.vz = mp.vz;
-                    var e: vec4<f32>;
-                    if (water) {
-                        e = coupling(pa, wall, true, q.p - mp.p, q.cw, mp.vg, mp.inv_k, q.inv_sum, zero);
-                    } else {
-                        e = coupling(pa, wall, false, mp.p - q.p, 0.0, q.vg, 0.0, 0.0, zero);
-                    }
-                    f -= e.xyz;
-                }
+        for_each_in_reach(j, start, rc) {
+            let q = pore[j];
+            let water = q.water != 0u;
+            if (water && mp.permeable != 0u) { continue; }
+            let pa = packed[j];
+            var pw = ws;
+            if (water) { pw = ww; }
+            let r = packed_x(pa) - xw;
+            let r2 = dot(r, r);
+            if (r2 >= prm.support2) { continue; }
+            let gw = r * kernel_grad_factor(sqrt(r2), prm.inv_h, prm.alpha);
+            let vab = packed_v(pa) - packed_v(pw);
+            f -= pair_term(pa, pw, r, r2, gw, vab) * (pa.mass * pw.mass);
+            var wall = pw;
+            wall.vx = mp.vx; wall.vy = mp.vy; wall.vz = mp.vz;
+            var e: vec4<f32>;
+            if (water) {
+                e = coupling(pa, wall, true, q.p - mp.p, q.cw, mp.vg, mp.inv_k, q.inv_sum, zero);
+            } else {
+                e = coupling(pa, wall, false, mp.p - q.p, 0.0, q.vg, 0.0, 0.0, zero);
             }
+            f -= e.xyz;
         }
     }
     let o = m_order[k];
