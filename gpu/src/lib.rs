@@ -21,6 +21,7 @@ mod error_code;
 mod kernels;
 mod layout;
 mod neighbour_loop;
+mod resources;
 mod shader;
 mod solver;
 
