@@ -1,12 +1,26 @@
 //! What a kernel can report as gone wrong, defined once for both sides: each code becomes a
 //! WGSL constant `ERR_<NAME>` in every kernel's source (`shader.rs` writes them before the
-//! common module), and the host turns the code it reads back from `Info::err_code` into the
-//! solver's error. A kernel stores the first nonzero code it meets (0 is "no error").
+//! common module), and the host turns the key it reads back from `Info::err_key` into the
+//! solver's error. A failing particle offers one key, its id above its code
+//! (`(id << CODE_BITS) | code`), to an atomic minimum: the step reports the failing particle with
+//! the smallest id together with its own error, whatever order the threads ran in.
 
 use regolith_fsi::SolverError;
 use regolith_fsi::rheology::RheologyError;
 
-/// A kernel's error, as the device stores it (`Info::err_code`).
+/// Bits of an error key that hold the code; the bits above hold the particle's id.
+pub(crate) const CODE_BITS: u32 = 4;
+/// The largest id a key holds: a particle with a larger id is reported with this one.
+pub(crate) const MAX_KEY_ID: u32 = u32::MAX >> CODE_BITS;
+/// The key of a step without error (no code uses the all-ones pattern, see the tests).
+pub(crate) const NO_ERROR: u32 = u32::MAX;
+
+/// The particle id and the code of an error key read back (`None` when no particle failed).
+pub(crate) fn decode(key: u32) -> Option<(u32, u32)> {
+    (key != NO_ERROR).then_some((key >> CODE_BITS, key & ((1 << CODE_BITS) - 1)))
+}
+
+/// A kernel's error, as the device stores it (the low bits of `Info::err_key`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
 pub(crate) enum DeviceError {
@@ -68,9 +82,15 @@ impl DeviceError {
         Self::ALL.into_iter().find(|e| *e as u32 == code)
     }
 
-    /// The WGSL declarations of every code (one `const` line each).
+    /// The WGSL declarations of every code (one `const` line each) and of the key's layout
+    /// (`ERR_CODE_BITS`, `ERR_MAX_ID`, `ERR_NONE`).
     pub(crate) fn wgsl_constants() -> String {
-        Self::ALL.iter().map(|e| format!("const {}: u32 = {}u;\n", e.wgsl_name(), *e as u32)).collect()
+        let mut s: String =
+            Self::ALL.iter().map(|e| format!("const {}: u32 = {}u;\n", e.wgsl_name(), *e as u32)).collect();
+        s += &format!("const ERR_CODE_BITS: u32 = {CODE_BITS}u;\n");
+        s += &format!("const ERR_MAX_ID: u32 = {MAX_KEY_ID}u;\n");
+        s += &format!("const ERR_NONE: u32 = {NO_ERROR}u;\n");
+        s
     }
 
     /// The solver's error for this code, met at `step` (ending at `time`) by `particle`.
@@ -130,16 +150,34 @@ mod tests {
         assert_eq!(DeviceError::from_code(0), None);
         assert_eq!(DeviceError::from_code(DeviceError::ALL.len() as u32 + 1), None);
         let consts = DeviceError::wgsl_constants();
-        assert_eq!(consts.lines().count(), DeviceError::ALL.len());
+        assert_eq!(consts.lines().count(), DeviceError::ALL.len() + 3);
         assert!(consts.contains("const ERR_DENSITY: u32 = 10u;"), "{consts}");
+    }
+
+    /// Every code fits the key's code bits without making the no-error pattern, and a key keeps
+    /// the id and the code of one particle: the smallest key is the smallest id's.
+    #[test]
+    fn a_key_carries_one_particles_id_and_code_and_orders_by_id() {
+        for e in DeviceError::ALL {
+            assert!((e as u32) < (1 << CODE_BITS) - 1, "{e:?} does not fit {CODE_BITS} bits below all ones");
+        }
+        let key = |id: u32, e: DeviceError| (id.min(MAX_KEY_ID) << CODE_BITS) | e as u32;
+        assert_eq!(decode(key(7, DeviceError::Velocity)), Some((7, DeviceError::Velocity as u32)));
+        assert_eq!(decode(key(u32::MAX, DeviceError::MccPc)), Some((MAX_KEY_ID, DeviceError::MccPc as u32)));
+        assert_eq!(decode(NO_ERROR), None);
+        // Two particles fail: the smaller id wins with its own code, not the other's larger one.
+        let keys = [key(12, DeviceError::Density), key(3, DeviceError::ElasticNonfinite)];
+        assert_eq!(decode(keys[0].min(keys[1])), Some((3, DeviceError::ElasticNonfinite as u32)));
     }
 
     /// The kernels name only codes this enum defines, and none declares its own.
     #[test]
     fn every_code_a_kernel_names_is_defined_here() {
-        let defined: Vec<&str> = DeviceError::ALL.iter().map(|e| e.wgsl_name()).collect();
+        // The codes and the key's layout constants, as written into every kernel's source.
+        let defined = names(&DeviceError::wgsl_constants());
         let sources = [
             ("advance.wgsl", include_str!("kernels/advance.wgsl")),
+            ("step_info.wgsl", include_str!("kernels/step_info.wgsl")),
             ("dp.wgsl", include_str!("kernels/dp.wgsl")),
             ("mcc.wgsl", include_str!("kernels/mcc.wgsl")),
             ("common.wgsl", include_str!("kernels/common.wgsl")),
@@ -150,7 +188,7 @@ mod tests {
         for (file, text) in sources {
             assert!(!text.contains("const ERR_"), "{file} declares an error code of its own");
             for n in names(text) {
-                assert!(defined.contains(&n.as_str()), "{file} names {n}, which DeviceError does not define");
+                assert!(defined.contains(&n), "{file} names {n}, which error_code.rs does not define");
                 used += 1;
             }
         }

@@ -123,8 +123,8 @@ pub struct Info {
     pub vmax: u32,
     pub amax: u32,
     pub pairs: u32,
-    pub err_id: u32,
-    pub err_code: u32,
+    /// The failing particle with the smallest id and its error (`error_code::decode`).
+    pub err_key: u32,
     pub vmax_end: u32,
     pub amax_end: u32,
     /// Largest drag rate λ = Σ C V W / m of the first stage (1/s, wet scenes).

@@ -207,7 +207,7 @@ impl GpuSph {
             queue.write_buffer(&b.markers, 0, bytemuck::cast_slice(&m_host));
         }
         queue.write_buffer(&b.m_limit, 0, bytemuck::bytes_of(&(nm as u32)));
-        let info0 = Info { active: n as u32, max_dt: f32::MAX, ..Info::zeroed() };
+        let info0 = Info { active: n as u32, max_dt: f32::MAX, err_key: crate::error_code::NO_ERROR, ..Info::zeroed() };
         queue.write_buffer(&b.info, 0, bytemuck::bytes_of(&info0));
 
         let g = Groups::new(device, &k, &b);
@@ -466,11 +466,10 @@ impl GpuSph {
         let time = self.time + dt;
         self.active = info.active as usize + self.asleep;
         self.uncovered = info.uncovered != 0;
-        if info.err_code != 0 {
-            let (step, particle) = (self.steps, info.err_id);
-            return Err(match DeviceError::from_code(info.err_code) {
-                Some(e) => e.into_solver_error(step, time, particle),
-                None => SolverError::Setup(format!("wgpu: unknown kernel error code {}", info.err_code)),
+        if let Some((particle, code)) = crate::error_code::decode(info.err_key) {
+            return Err(match DeviceError::from_code(code) {
+                Some(e) => e.into_solver_error(self.steps, time, particle),
+                None => SolverError::Setup(format!("wgpu: unknown kernel error code {code}")),
             });
         }
         if !(dt.is_finite() && dt > 0.0) {

@@ -49,9 +49,9 @@ fn density_floor(mat: Material) -> f32 {
     return mat.density * RAREFIED_DENSITY;
 }
 
+// Offers the particle's error key: the step keeps the smallest id with its own code.
 fn fail(id: u32, code: u32) {
-    atomicMin(&info.err_id, id);
-    atomicMax(&info.err_code, code);
+    atomicMin(&info.err_key, (min(id, ERR_MAX_ID) << ERR_CODE_BITS) | code);
 }
 
 @compute @workgroup_size(64)

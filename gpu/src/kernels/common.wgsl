@@ -52,7 +52,7 @@ struct Marker {
 struct Info {
     n_active: u32, dt: f32, max_dt: f32, rarefied: atomic<u32>,
     cmax: atomic<u32>, vmax: atomic<u32>, amax: atomic<u32>, pairs: atomic<u32>,
-    err_id: atomic<u32>, err_code: atomic<u32>, vmax_end: atomic<u32>, amax_end: atomic<u32>,
+    err_key: atomic<u32>, vmax_end: atomic<u32>, amax_end: atomic<u32>,
     drag: atomic<u32>, uncovered: atomic<u32>,
 }
 

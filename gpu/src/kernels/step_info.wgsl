@@ -15,8 +15,7 @@ fn reset() {
     atomicStore(&info.vmax, 0u);
     atomicStore(&info.amax, 0u);
     atomicStore(&info.pairs, 0u);
-    atomicStore(&info.err_id, 0xffffffffu);
-    atomicStore(&info.err_code, 0u);
+    atomicStore(&info.err_key, ERR_NONE);
     atomicStore(&info.vmax_end, 0u);
     atomicStore(&info.amax_end, 0u);
     atomicStore(&info.rarefied, 0u);
