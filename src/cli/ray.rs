@@ -33,15 +33,17 @@ pub(super) fn check_ray_flags(
 /// interpreter's name (for messages) and its exit status.
 pub(super) fn run_module(module: &str, args: &[String]) -> Result<(String, ExitStatus), Failure> {
     let python = std::env::var(PYTHON_ENV).unwrap_or_else(|_| "python3".into());
-    let script = format!(
-        "import sys\n\
-         try:\n\
-         \x20   import regolith.{module} as m\n\
-         except ImportError as e:\n\
-         \x20   print('error: --runner ray: ' + str(e) + ' (install the Python package and Ray: pip install ./python ray; or pass --runner threads)', file=sys.stderr)\n\
-         \x20   sys.exit(2)\n\
-         sys.exit(m.main(sys.argv[1:]))\n"
-    );
+    let hint = "install the Python package and Ray: pip install ./python ray; or pass --runner threads";
+    let script = [
+        "import sys".to_string(),
+        "try:".into(),
+        format!("    import regolith.{module} as m"),
+        "except ImportError as e:".into(),
+        format!("    print('error: --runner ray: ' + str(e) + ' ({hint})', file=sys.stderr)"),
+        "    sys.exit(2)".into(),
+        "sys.exit(m.main(sys.argv[1:]))".into(),
+    ]
+    .join("\n");
     let status = std::process::Command::new(&python).arg("-c").arg(script).args(args).status().map_err(|e| {
         InputError::flag(
             "--runner",
