@@ -145,6 +145,7 @@ pub(crate) fn params(
     }
 }
 
+/// The compiled kernels of a dry step (a wet scene adds those of [`WetParts`]).
 pub(crate) struct Kernels {
     pub(crate) sort_soil: Sort,
     pub(crate) sort_markers: Sort,
