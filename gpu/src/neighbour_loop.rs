@@ -66,6 +66,8 @@ pub(crate) fn expand(src: &str) -> Result<String, ExpandError> {
              let {hi} = {starts}[cell_linear({x}, {y}, {reach}.z1) + 1u]; \
              for (var {index} = {lo}; {index} < {hi}; {index}++) {{"
         );
+        // Line breaks between the statement and its brace stay, so later lines keep their numbers.
+        let header = header + &"\n".repeat(s[at..open].matches('\n').count());
         // The closing brace first: replacing the header moves everything after it.
         s.replace_range(end..=end, "} } }");
         s.replace_range(at..=open, &header);
@@ -176,6 +178,11 @@ mod tests {
         let code: String = out.lines().map(|l| l.split("//").next().unwrap_or("")).collect();
         assert_eq!(code.matches('{').count(), code.matches('}').count(), "braces balance: {out}");
         assert_eq!(out.lines().count(), src.lines().count());
+        // A brace on the next line: the line count still holds.
+        let src = "for_each_in_reach(j, start, rc)\n{\n    n++;\n}\nend;\n";
+        let out = expand(src).expect("expands");
+        assert_eq!(out.lines().count(), src.lines().count(), "{out}");
+        assert!(out.ends_with("    n++;\n} } }\nend;\n"), "{out}");
     }
 
     #[test]
