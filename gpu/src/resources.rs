@@ -41,12 +41,12 @@ pub(crate) fn bytes(count: usize, each: usize) -> u64 {
 /// widest dispatch and, for a wet scene, the storage buffers of its widest kernel.
 pub(crate) fn check_limits(limits: &wgpu::Limits, c: &Counts, wet: bool) -> Result<(), GpuError> {
     let Counts { cap, nm, n_cells, .. } = *c;
-    let check = |what: &str, bytes: u64| -> Result<(), GpuError> {
+    let check = |what: &str, needed: u64| -> Result<(), GpuError> {
         let allowed = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
-        if bytes > allowed {
+        if needed > allowed {
             return Err(GpuError::Limit {
                 what: what.into(),
-                needed: bytes,
+                needed,
                 allowed,
                 limit: "max_storage_buffer_binding_size",
             });
