@@ -340,18 +340,21 @@ fn fresh_deposit(end: f64) -> String {
 }
 
 /// Issue 18's Terzaghi check: the settlement degree U of a fresh saturated deposit within 10 %
-/// of the series at T_v = 0.05, 0.2, 0.5 and 1. The drained top is the soil's face under 3 cm
+/// of the series at T_v = 0.05, 0.2 and 0.5 (U = 0.10, 0.37 and 0.70: the early, middle and
+/// late parts of the curve). T_v = 1 (U = 0.91) doubled the run for one more point; its error
+/// stays in docs/two_phase.md's table (−1.2 %, the same run to T_v = 1 in session 25's suite),
+/// and CI stops at 0.5 (issue 46: the suite's time). The drained top is the soil's face under 3 cm
 /// of free water: more than the kernel support (2h = 2.4 cm), so the water's own free surface
 /// is out of reach of the soil. With the top at the free surface the layer drains too fast
-/// (docs/two_phase.md, "Terzaghi consolidation"). Measured (2 vCPU, about 150 s): −2.5 / −0.5 /
-/// +0.1 / −1.2 %. A layer half as high misses (−7 to −17 % at T_v = 0.05 depending on the box,
+/// (docs/two_phase.md, "Terzaghi consolidation"). Measured (2 vCPU, about 75 s): −2.5 / −0.5 /
+/// +0.1 %. A layer half as high misses (−7 to −17 % at T_v = 0.05 depending on the box,
 /// the depth of water and d0): not from too few acoustic crossings (a water twice as stiff
 /// misses as much) but in its end state, 94 % of γ' h² / (2 E_oed) at T_v = 4, because about
 /// 100 Pa of the soil's buoyant weight near its face stays on the water at rest
 /// (docs/two_phase.md, "Terzaghi consolidation").
 #[test]
 fn a_fresh_saturated_deposit_consolidates_under_its_own_weight_along_terzaghi() {
-    let worst = consolidate(&fresh_deposit, TZ_H, &[0.05, 0.2, 0.5, 1.0], |_, _| {});
+    let worst = consolidate(&fresh_deposit, TZ_H, &[0.05, 0.2, 0.5], |_, _| {});
     assert!(worst < 0.10, "U off the series by up to {:.1} %", 100.0 * worst);
 }
 

@@ -879,7 +879,9 @@ fn every_example_scene_runs_on_wgpu_from_the_cli() {
 /// The saturated example scenes run on wgpu from the CLI, the collapse with either drag
 /// distribution and the plate rig (a body pushed into a saturated bed); both phases are in
 /// the final particles (materials 0, the soil, and 1, the water; the recording's `phase`
-/// field is derived from the material on the host, `recording.rs` checks it).
+/// field is derived from the material on the host, `recording.rs` checks it). 0.4 ms each,
+/// two exchanges (7 steps of the collapse): a wet step of the 6340-particle collapse takes about 1 s on
+/// lavapipe, and the physics is checked against the CPU by the parity tests above.
 #[test]
 fn saturated_scenes_run_on_wgpu_with_either_drag() {
     for (scene, drag) in [
@@ -900,7 +902,9 @@ fn saturated_scenes_run_on_wgpu_with_either_drag() {
             "--out",
             &o,
             "--set",
-            "simulation.end_time=0.001",
+            "simulation.end_time=0.0004",
+            "--set",
+            "simulation.exchange_interval=0.0002",
             "--set",
             &set_drag,
         ];
@@ -913,7 +917,7 @@ fn saturated_scenes_run_on_wgpu_with_either_drag() {
             serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
         assert_eq!(s["backend"], "wgpu", "{scene}");
         assert_eq!(s["nan_detected"], false, "{scene}");
-        assert!(s["steps"].as_u64().expect("steps") > 10, "{scene}");
+        assert!(s["steps"].as_u64().expect("steps") > 3, "{scene}");
         assert_eq!(s["escaped_particles"], 0, "{scene}");
         assert_eq!(s["mass_initial"], s["mass_final"], "{scene}: the water's masses are set once, at the start");
         assert!(s["max_speed"].as_f64().expect("speed") < 1.0, "{scene}: {}", s["max_speed"]);
