@@ -269,7 +269,7 @@ impl Buffers {
             cell_of: mk("cell_of", bytes(cap, 4), USAGE),
             counts: mk("counts", bytes(n_cells + 1, 4), USAGE),
             start: mk("start", bytes(n_cells + 2, 4), USAGE),
-            sums: mk("sums", bytes((n_cells + 1).div_ceil(512), 4), USAGE),
+            sums: mk("sums", bytes(scan_blocks(n_cells + 1), 4), USAGE),
             order: mk("order", bytes(cap, 4), USAGE),
             markers: mk("markers", bytes(nm, size_of::<Marker>()), USAGE),
             m_sorted: mk("markers.sorted", bytes(nm, size_of::<Marker>()), USAGE),
@@ -277,7 +277,7 @@ impl Buffers {
             m_cell_of: mk("markers.cell_of", bytes(nm, 4), USAGE),
             m_counts: mk("markers.counts", bytes(n_cells + 1, 4), USAGE),
             m_start: mk("markers.start", bytes(n_cells + 2, 4), USAGE),
-            m_sums: mk("markers.sums", bytes((n_cells + 1).div_ceil(512), 4), USAGE),
+            m_sums: mk("markers.sums", bytes(scan_blocks(n_cells + 1), 4), USAGE),
             m_order: mk("markers.order", bytes(nm, 4), USAGE),
             m_packed: mk("markers.packed", bytes(nm, size_of::<Packed>()), USAGE),
             m_force: mk("markers.force", bytes(nm, 12), USAGE),
@@ -591,4 +591,9 @@ pub(crate) fn gpu_material(m: &Material<f32>) -> layout::Material {
         g.grain_por = m.grain_density;
     }
     g
+}
+
+/// Words of a scan's block totals for `len` counts.
+fn scan_blocks(len: usize) -> usize {
+    crate::kernels::scan::blocks(u32::try_from(len).unwrap_or(u32::MAX)) as usize
 }

@@ -98,7 +98,8 @@ pub(crate) fn source(e: &Effects, v: &Variant, kernel: &str, with_rheology: bool
     let _ = writeln!(s, "const STAGE: bool = {};", b(v.stage));
     let _ = writeln!(s, "const STRIDE: u32 = {}u;", v.stride.max(1));
     let _ = writeln!(s, "const LEN: u32 = {}u;", v.len.max(1));
-    let _ = writeln!(s, "const BLOCKS: u32 = {}u;", v.len.max(1).div_ceil(512));
+    let _ = writeln!(s, "const SCAN_BLOCK: u32 = {}u;", crate::kernels::scan::SCAN_BLOCK);
+    let _ = writeln!(s, "const BLOCKS: u32 = {}u;", crate::kernels::scan::blocks(v.len.max(1)));
     s.push_str(&DeviceError::wgsl_constants());
     s.push_str(COMMON);
     s.push_str(MATERIALS);

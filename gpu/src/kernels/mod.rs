@@ -40,6 +40,29 @@ pub(crate) fn dispatch(
     }
 }
 
+/// The first adapter's device (lavapipe in CI), for the kernels' own tests.
+#[cfg(test)]
+pub(crate) fn test_device() -> (wgpu::Device, wgpu::Queue) {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+        backends: wgpu::Backends::PRIMARY,
+        ..wgpu::InstanceDescriptor::new_without_display_handle()
+    });
+    let adapter = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::PRIMARY))
+        .into_iter()
+        .next()
+        .expect("a wgpu adapter (lavapipe in CI)");
+    pollster::block_on(
+        adapter.request_device(&wgpu::DeviceDescriptor { required_limits: adapter.limits(), ..Default::default() }),
+    )
+    .expect("device")
+}
+
+/// An unmapped buffer of `size` bytes, for the kernels' own tests.
+#[cfg(test)]
+pub(crate) fn test_buffer(device: &wgpu::Device, size: usize, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor { label: None, size: size as u64, usage, mapped_at_creation: false })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -62,31 +85,13 @@ fn count(@builtin(global_invocation_id) gid: vec3<u32>) {
     /// exactly once: `dispatch` splits it into rows and `flat` in common.wgsl joins them.
     #[test]
     fn a_dispatch_wider_than_a_row_runs_every_index_once() {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
-            backends: wgpu::Backends::PRIMARY,
-            ..wgpu::InstanceDescriptor::new_without_display_handle()
-        });
-        let adapter = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::PRIMARY))
-            .into_iter()
-            .next()
-            .expect("a wgpu adapter (lavapipe in CI)");
-        let (device, queue) = pollster::block_on(
-            adapter.request_device(&wgpu::DeviceDescriptor { required_limits: adapter.limits(), ..Default::default() }),
-        )
-        .expect("device");
+        let (device, queue) = test_device();
         let n = ROW_GROUPS as usize * 64 + 1000;
         let e = Effects::resolve(&regolith_fsi::config::SolverConfig::default(), &[]);
         let lay = layout(&device, "count", &[(0, Bind::Uniform), (1, Bind::ReadWrite)]);
         let src = source(&e, &Variant::default(), COUNT, false);
         let pipeline = pipelines(&device, "count", &src, &lay, &["count"]).expect("compiles").pop().expect("one");
-        let buf = |size: usize, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: None,
-                size: size as u64,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
+        let buf = |size: usize, usage| test_buffer(&device, size, usage);
         let params = buf(size_of::<Params>(), wgpu::BufferUsages::UNIFORM);
         let hits = buf(n * 4, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
         let read = buf(n * 4, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
