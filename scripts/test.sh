@@ -30,10 +30,12 @@ fi
 export PYO3_BUILD_EXTENSION_MODULE=1
 
 # The tests are built for this machine's CPU (AVX2 on the CI machines: eight f32 lanes in the
-# pair loop instead of SSE's four). Only the instruction selection changes: Rust does not fuse
-# or reorder floating-point operations for a target, so the results are those of the generic
-# build `cargo build --release` makes, which must run on any x86-64 (BENCHMARKS.md). Every
-# phase below uses the same flags, so the wheel and the doc tests reuse the test build.
+# pair loop instead of SSE's four; 18 % on a soil-only run). The soil's arithmetic is the same
+# (Rust does not fuse or reorder floating-point operations for a target: bit-identical
+# results); the rigid-body side differs in round-off (glam, under rapier, takes FMA paths when
+# the target has FMA). `cargo build --release` stays generic: it must run on any x86-64
+# (NOTES.md, session 26). Every phase below uses the same flags, so the wheel and the doc tests
+# reuse the test build.
 export RUSTFLAGS="${RUSTFLAGS:+$RUSTFLAGS }-C target-cpu=native"
 
 # Mesa's Vulkan loader warns on every device open without a runtime dir; give it one.

@@ -15,7 +15,7 @@ use regolith_fsi::cpu::ActiveRegion;
 use crate::GpuError;
 use crate::kernels::{active::Cover, classify::Classify, dilate::Dilate, dispatch, scan::Scan};
 use crate::layout::{ActiveBox, ClassifyParams};
-use crate::shader::{Effects, USAGE, bind, buffer, groups};
+use crate::shader::{Effects, USAGE, bind, buffer, groups, scan_blocks};
 
 /// The buffers a classification and the per-step check share with the solver.
 pub(crate) struct Shared<'a> {
@@ -86,7 +86,7 @@ impl ActiveParts {
         let cell_of = mk("active.cell_of", capacity, USAGE);
         let keys = mk("active.keys", len, USAGE);
         let kstart = mk("active.kstart", len + 1, USAGE);
-        let sums = mk("active.sums", crate::kernels::scan::blocks(len as u32) as usize, USAGE);
+        let sums = mk("active.sums", scan_blocks(len as u32) as usize, USAGE);
         let counts = mk("active.counts", 4, USAGE);
         let counts_read = mk("active.counts.read", 4, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
         let params = mk("active.params", size_of::<ClassifyParams>() / 4, uniform);

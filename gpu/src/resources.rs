@@ -595,5 +595,5 @@ pub(crate) fn gpu_material(m: &Material<f32>) -> layout::Material {
 
 /// Words of a scan's block totals for `len` counts.
 fn scan_blocks(len: usize) -> usize {
-    crate::kernels::scan::blocks(u32::try_from(len).unwrap_or(u32::MAX)) as usize
+    crate::shader::scan_blocks(u32::try_from(len).unwrap_or(u32::MAX)) as usize
 }

@@ -58,6 +58,16 @@ impl Effects {
     }
 }
 
+/// Counts one workgroup of `scan.wgsl`'s `scan_blocks` scans (256 threads, 8 counts each);
+/// written into every kernel's source as `SCAN_BLOCK`.
+pub(crate) const SCAN_BLOCK: u32 = 2048;
+
+/// Blocks of [`SCAN_BLOCK`] counts that `len` counts fill (at least one): the words a scan's
+/// buffer of block totals needs.
+pub(crate) fn scan_blocks(len: u32) -> u32 {
+    len.div_ceil(SCAN_BLOCK).max(1)
+}
+
 /// Per-pipeline switches on top of the effects.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Variant {
@@ -98,8 +108,8 @@ pub(crate) fn source(e: &Effects, v: &Variant, kernel: &str, with_rheology: bool
     let _ = writeln!(s, "const STAGE: bool = {};", b(v.stage));
     let _ = writeln!(s, "const STRIDE: u32 = {}u;", v.stride.max(1));
     let _ = writeln!(s, "const LEN: u32 = {}u;", v.len.max(1));
-    let _ = writeln!(s, "const SCAN_BLOCK: u32 = {}u;", crate::kernels::scan::SCAN_BLOCK);
-    let _ = writeln!(s, "const BLOCKS: u32 = {}u;", crate::kernels::scan::blocks(v.len.max(1)));
+    let _ = writeln!(s, "const SCAN_BLOCK: u32 = {SCAN_BLOCK}u;");
+    let _ = writeln!(s, "const BLOCKS: u32 = {}u;", scan_blocks(v.len.max(1)));
     s.push_str(&DeviceError::wgsl_constants());
     s.push_str(COMMON);
     s.push_str(MATERIALS);

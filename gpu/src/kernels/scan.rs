@@ -1,11 +1,7 @@
 //! Exclusive prefix sum of bin counts (`scan.wgsl`): `scan_blocks`, `scan_sums`, `add_sums`.
 
 use crate::GpuError;
-use crate::shader::{Bind, Effects, Variant, layout, pipelines, source};
-
-/// Counts one workgroup of `scan_blocks` scans (256 threads, 8 counts each): the `sums`
-/// buffers hold one word per block. `SCAN_BLOCK` in the WGSL is generated from it.
-pub(crate) const SCAN_BLOCK: u32 = 2048;
+use crate::shader::{Bind, Effects, Variant, layout, pipelines, scan_blocks, source};
 
 pub(crate) struct Scan {
     pub layout: wgpu::BindGroupLayout,
@@ -14,12 +10,6 @@ pub(crate) struct Scan {
     pub add_sums: wgpu::ComputePipeline,
     /// Counts scanned.
     pub len: u32,
-}
-
-/// Blocks of `SCAN_BLOCK` counts that `len` counts fill (at least one): the words a `sums`
-/// buffer needs.
-pub(crate) fn blocks(len: u32) -> u32 {
-    len.div_ceil(SCAN_BLOCK).max(1)
 }
 
 impl Scan {
@@ -36,7 +26,7 @@ impl Scan {
 
     /// Number of blocks of `SCAN_BLOCK` counts.
     pub fn blocks(&self) -> u32 {
-        blocks(self.len)
+        scan_blocks(self.len)
     }
 
     pub fn record(&self, enc: &mut wgpu::CommandEncoder, group: &wgpu::BindGroup) {
@@ -50,7 +40,7 @@ impl Scan {
 mod tests {
     use super::*;
     use crate::layout::Params;
-    use crate::shader::bind;
+    use crate::shader::{SCAN_BLOCK, bind};
 
     /// The device's scan equals the serial exclusive prefix sum for lengths around a block's
     /// edges and for one with more block totals than `scan_sums` takes in one chunk (its carry).
@@ -68,7 +58,7 @@ mod tests {
             let cnt = buf(4 * len, storage);
             queue.write_buffer(&cnt, 0, bytemuck::cast_slice(&counts));
             let start = buf(4 * (len + 1), storage);
-            let sums = buf(4 * blocks(len as u32) as usize, storage);
+            let sums = buf(4 * scan_blocks(len as u32) as usize, storage);
             let read = buf(4 * (len + 1), wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
             let group = bind(&device, "scan", &scan.layout, &[(0, &params), (1, &cnt), (2, &start), (3, &sums)]);
             let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
