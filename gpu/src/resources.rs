@@ -593,7 +593,8 @@ pub(crate) fn gpu_material(m: &Material<f32>) -> layout::Material {
     g
 }
 
-/// Words of a scan's block totals for `len` counts.
+/// Words of a scan's block totals for `len` counts (`len` fits a u32: `check_limits` refuses
+/// more cells than u32 indices reach before any buffer is made).
 fn scan_blocks(len: usize) -> usize {
     crate::shader::scan_blocks(u32::try_from(len).unwrap_or(u32::MAX)) as usize
 }

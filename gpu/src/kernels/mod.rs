@@ -63,6 +63,24 @@ pub(crate) fn test_buffer(device: &wgpu::Device, size: usize, usage: wgpu::Buffe
     device.create_buffer(&wgpu::BufferDescriptor { label: None, size: size as u64, usage, mapped_at_creation: false })
 }
 
+/// Copies `src` into a mappable buffer after the commands of `enc`, submits, waits and returns
+/// its words, for the kernels' own tests.
+#[cfg(test)]
+pub(crate) fn test_read_u32(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    mut enc: wgpu::CommandEncoder,
+    src: &wgpu::Buffer,
+) -> Vec<u32> {
+    let read = test_buffer(device, src.size() as usize, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+    enc.copy_buffer_to_buffer(src, 0, &read, 0, None);
+    queue.submit([enc.finish()]);
+    read.map_async(wgpu::MapMode::Read, .., |r| r.expect("mapped"));
+    device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
+    let view = read.get_mapped_range(..).expect("view");
+    bytemuck::cast_slice(&view).to_vec()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -94,17 +112,11 @@ fn count(@builtin(global_invocation_id) gid: vec3<u32>) {
         let buf = |size: usize, usage| test_buffer(&device, size, usage);
         let params = buf(size_of::<Params>(), wgpu::BufferUsages::UNIFORM);
         let hits = buf(n * 4, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
-        let read = buf(n * 4, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
         let group = bind(&device, "count", &lay, &[(0, &params), (1, &hits)]);
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         assert!(groups(n) > ROW_GROUPS);
         dispatch(&mut enc, &pipeline, &group, groups(n));
-        enc.copy_buffer_to_buffer(&hits, 0, &read, 0, None);
-        queue.submit([enc.finish()]);
-        read.map_async(wgpu::MapMode::Read, .., |r| r.expect("mapped"));
-        device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
-        let view = read.get_mapped_range(..).expect("view");
-        let hits: &[u32] = bytemuck::cast_slice(&view);
+        let hits = test_read_u32(&device, &queue, enc, &hits);
         let wrong: Vec<(usize, u32)> = hits.iter().copied().enumerate().filter(|(_, h)| *h != 1).take(5).collect();
         assert!(wrong.is_empty(), "indices run other than once (index, times): {wrong:?} of {n}");
     }

@@ -59,16 +59,10 @@ mod tests {
             queue.write_buffer(&cnt, 0, bytemuck::cast_slice(&counts));
             let start = buf(4 * (len + 1), storage);
             let sums = buf(4 * scan_blocks(len as u32) as usize, storage);
-            let read = buf(4 * (len + 1), wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
             let group = bind(&device, "scan", &scan.layout, &[(0, &params), (1, &cnt), (2, &start), (3, &sums)]);
             let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
             scan.record(&mut enc, &group);
-            enc.copy_buffer_to_buffer(&start, 0, &read, 0, None);
-            queue.submit([enc.finish()]);
-            read.map_async(wgpu::MapMode::Read, .., |r| r.expect("mapped"));
-            device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
-            let view = read.get_mapped_range(..).expect("view");
-            let got: &[u32] = bytemuck::cast_slice(&view);
+            let got = crate::kernels::test_read_u32(&device, &queue, enc, &start);
             let mut want = Vec::with_capacity(len + 1);
             let mut sum = 0u32;
             for c in &counts {
