@@ -15,7 +15,7 @@
 use std::path::Path;
 
 use regolith_coupling::{ExchangeReport, FsiBodyId, FsiSystem, Wrench};
-use regolith_fsi::{Real, SolverError};
+use regolith_fsi::{ByPrecision, PerPrecision, Real, SolverError};
 use regolith_rigid::{BodyId, BodyState, JointDesc, JointId, Pose, ShapeDesc};
 use regolith_terrain::TerrainBuild;
 
@@ -82,7 +82,13 @@ impl<T: Real> Simulation<T> {
     }
 
     /// Builds a validated scene (see [`crate::build::assemble`]).
+    ///
+    /// Compiled once per precision, in this crate ([`Real::by_precision`]).
     pub fn new(scene: &Scene) -> Result<Self, BuildError> {
+        T::from_precision::<Built>(|| new_f32(scene), || new_f64(scene))
+    }
+
+    fn new_generic(scene: &Scene) -> Result<Self, BuildError> {
         let a = assemble::<T>(scene)?;
         let mut sim = Self {
             system: a.system,
@@ -168,7 +174,16 @@ impl<T: Real> Simulation<T> {
 
     /// Advances one exchange interval (or to `max` seconds ahead if sooner). Vehicle drive
     /// profiles are applied at the start of the interval.
+    ///
+    /// Compiled once per precision, in this crate ([`Real::by_precision`]).
     pub fn step_max(&mut self, max: Option<f64>) -> Result<ExchangeReport, SolverError> {
+        match T::by_precision::<SimMut<'_>>(self) {
+            ByPrecision::F32(sim) => step_f32(sim, max),
+            ByPrecision::F64(sim) => step_f64(sim, max),
+        }
+    }
+
+    fn step_generic(&mut self, max: Option<f64>) -> Result<ExchangeReport, SolverError> {
         self.apply_drives();
         let r = self.system.advance(max)?;
         // A device backend refreshes its host copy of the particles once per exchange, for
@@ -437,4 +452,43 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 fn steering_gains(max_torque: f64) -> (f64, f64) {
     let k = max_torque / 0.05;
     (k, 0.1 * k)
+}
+
+/// `Result<Simulation<T>, BuildError>` as a [`PerPrecision`] family, for [`Simulation::new`].
+struct Built;
+
+impl PerPrecision for Built {
+    type Of<T: Real> = Result<Simulation<T>, BuildError>;
+}
+
+/// `&mut Simulation<T>` as a [`PerPrecision`] family, for [`Simulation::step_max`].
+struct SimMut<'a>(std::marker::PhantomData<&'a ()>);
+
+impl<'a> PerPrecision for SimMut<'a> {
+    type Of<T: Real> = &'a mut Simulation<T>;
+}
+
+/// The `f32` build, compiled here once (never inlined into a caller's crate, which would
+/// compile the generic build there again).
+#[inline(never)]
+fn new_f32(scene: &Scene) -> Result<Simulation<f32>, BuildError> {
+    Simulation::new_generic(scene)
+}
+
+/// The `f64` build, compiled here once.
+#[inline(never)]
+fn new_f64(scene: &Scene) -> Result<Simulation<f64>, BuildError> {
+    Simulation::new_generic(scene)
+}
+
+/// The `f32` exchange step, compiled here once.
+#[inline(never)]
+fn step_f32(sim: &mut Simulation<f32>, max: Option<f64>) -> Result<ExchangeReport, SolverError> {
+    sim.step_generic(max)
+}
+
+/// The `f64` exchange step, compiled here once.
+#[inline(never)]
+fn step_f64(sim: &mut Simulation<f64>, max: Option<f64>) -> Result<ExchangeReport, SolverError> {
+    sim.step_generic(max)
 }

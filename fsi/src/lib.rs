@@ -19,6 +19,6 @@ pub mod rheology;
 mod solver;
 
 pub use particles::{MarkerInit, ParticleInit, SolverError, StepReport};
-pub use real::Real;
+pub use real::{ByPrecision, PerPrecision, Real};
 pub use regolith_body::{BodyState, Wrench};
 pub use solver::{BodyMarkers, SphSolver, place_on_host};

@@ -36,6 +36,36 @@ pub trait Real:
     /// (`cpu::lanes`): pays with four f32 lanes per SSE register, not with two f64 ones
     /// (measured in BENCHMARKS.md), which run the scalar loop.
     const PAIR_BLOCKS: bool;
+    /// Says which of the two precisions `Self` is, handing `x` back typed with it: the way
+    /// to call code compiled once per precision from code generic over `T: Real`.
+    ///
+    /// A generic function is compiled again in every crate that calls it with a concrete `T`
+    /// (release builds do not share instantiations between crates), so a generic solver step
+    /// was compiled into the library, its unit tests, the integration tests and the Python
+    /// bindings alike. A generic entry point that matches on `by_precision` and calls a plain
+    /// `fn(&mut CpuSph<f32>)` or `fn(&mut CpuSph<f64>)` keeps the step's machine code in this
+    /// crate, compiled once (`cpu::CpuSph::step`; NOTES.md, session 27).
+    fn by_precision<W: PerPrecision>(x: W::Of<Self>) -> ByPrecision<W::Of<f32>, W::Of<f64>>;
+    /// The way back: makes a value of the family at precision `Self` with whichever of the
+    /// two makers is `Self`'s (a constructor compiled once per precision, say).
+    fn from_precision<W: PerPrecision>(
+        f32: impl FnOnce() -> W::Of<f32>,
+        f64: impl FnOnce() -> W::Of<f64>,
+    ) -> W::Of<Self>;
+}
+
+/// A family of types built on a precision (`&mut CpuSph<T>`, say), for [`Real::by_precision`].
+pub trait PerPrecision {
+    /// The family's type at precision `T`.
+    type Of<T: Real>;
+}
+
+/// A value of a [`PerPrecision`] family at either precision.
+pub enum ByPrecision<A, B> {
+    /// The `f32` member.
+    F32(A),
+    /// The `f64` member.
+    F64(B),
 }
 
 impl Real for f64 {
@@ -49,6 +79,14 @@ impl Real for f64 {
     }
     const NAME: &'static str = "f64";
     const PAIR_BLOCKS: bool = false;
+    #[inline(always)]
+    fn by_precision<W: PerPrecision>(x: W::Of<f64>) -> ByPrecision<W::Of<f32>, W::Of<f64>> {
+        ByPrecision::F64(x)
+    }
+    #[inline(always)]
+    fn from_precision<W: PerPrecision>(_: impl FnOnce() -> W::Of<f32>, f64: impl FnOnce() -> W::Of<f64>) -> W::Of<f64> {
+        f64()
+    }
 }
 
 impl Real for f32 {
@@ -62,4 +100,12 @@ impl Real for f32 {
     }
     const NAME: &'static str = "f32";
     const PAIR_BLOCKS: bool = true;
+    #[inline(always)]
+    fn by_precision<W: PerPrecision>(x: W::Of<f32>) -> ByPrecision<W::Of<f32>, W::Of<f64>> {
+        ByPrecision::F32(x)
+    }
+    #[inline(always)]
+    fn from_precision<W: PerPrecision>(f32: impl FnOnce() -> W::Of<f32>, _: impl FnOnce() -> W::Of<f64>) -> W::Of<f32> {
+        f32()
+    }
 }

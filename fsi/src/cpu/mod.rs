@@ -31,7 +31,6 @@ pub use wet::{DELTA_SPH, WetSetup};
 
 use rayon::prelude::*;
 
-use crate::Real;
 use crate::active::{ActiveDomain, RoleCounts};
 use crate::config::{
     DETACHED_THRESHOLD, FreeSurfaceStress, Integrator, KernelKind, RAREFIED_DENSITY, SolverConfig, TimeStep,
@@ -40,6 +39,7 @@ use crate::kernel::{CubicSpline, Kernel, WendlandC2};
 use crate::math::{Sym3, Vec3};
 use crate::particles::{MarkerInit, ParticleInit, SolverError, StepReport};
 use crate::rheology::{Material, Moduli, PointState, RheologyError};
+use crate::{ByPrecision, PerPrecision, Real};
 use regolith_body::BodyState;
 
 use grid::{CellIndexer, CellSort};
@@ -1208,7 +1208,17 @@ impl<T: Real> CpuSph<T> {
     /// the caller's thread and sleeping until it is done: there those handovers (a context
     /// switch each) cost more than the loops. The work is split the same way either way, so the
     /// results do not change (NOTES.md, "Where the suite's time goes").
+    ///
+    /// The step is compiled once per precision, in this crate ([`Real::by_precision`]), not
+    /// again in every crate that steps a solver.
     pub fn step(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
+        match T::by_precision::<StepMut<'_>>(self) {
+            ByPrecision::F32(sph) => step_f32(sph, max_dt),
+            ByPrecision::F64(sph) => step_f64(sph, max_dt),
+        }
+    }
+
+    fn step_generic(&mut self, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
         if self.len() + self.marker_positions().len() < SMALL_STEP {
             rayon::scope(|_| self.step_in_pool(max_dt))
         } else {
@@ -1512,6 +1522,26 @@ fn correct<T: Real>(
     };
     st.advance_volume(r.d.trace() * dt);
     Ok((s, st))
+}
+
+/// `&mut CpuSph<T>` as a [`PerPrecision`] family, for [`CpuSph::step`].
+struct StepMut<'a>(std::marker::PhantomData<&'a ()>);
+
+impl<'a> PerPrecision for StepMut<'a> {
+    type Of<T: Real> = &'a mut CpuSph<T>;
+}
+
+/// The `f32` step, compiled here once (never inlined into another crate, which would compile
+/// the generic step there again).
+#[inline(never)]
+fn step_f32(sph: &mut CpuSph<f32>, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
+    sph.step_generic(max_dt)
+}
+
+/// The `f64` step, compiled here once.
+#[inline(never)]
+fn step_f64(sph: &mut CpuSph<f64>, max_dt: Option<f64>) -> Result<StepReport, SolverError> {
+    sph.step_generic(max_dt)
 }
 
 #[cfg(test)]
