@@ -71,11 +71,10 @@ TEST_LOG=target/test-times.log
 # times to their output (see that file); the builds are the same as without it.
 host=$(rustc -vV | sed -n 's/^host: //p')
 runner_var="CARGO_TARGET_$(echo "$host" | tr 'a-z-' 'A-Z_')_RUNNER"
-# One test more than the machine has cores: a test spends part of its time on one thread (the
-# rigid bodies, building a scene, writing files) while rayon's pool waits, and a third test
-# fills that (on 2 cores, ten coupled tests: 291 s with two at once, 1.77 cores busy; 259 s with
-# three, 1.93; NOTES.md, session 27). REGOLITH_TEST_THREADS overrides it.
-TEST_THREADS="${REGOLITH_TEST_THREADS:-$(($(nproc) + 1))}"
+# As many tests at once as the machine has cores (libtest's own default). One more was tried:
+# on ten coupled tests it gained 11 %, but the whole suite took 2167 s with three at once
+# against 1924 s with two (NOTES.md, session 27). REGOLITH_TEST_THREADS overrides it.
+TEST_THREADS="${REGOLITH_TEST_THREADS:-$(nproc)}"
 cargo_tests() {
     env "$runner_var=$PWD/scripts/timed_test_runner.sh" RUST_TEST_THREADS="$TEST_THREADS" \
         cargo test --release --workspace --all-targets 2>&1 | tee "$TEST_LOG"
