@@ -122,9 +122,8 @@ fn a_scene_without_fsi_bodies_keeps_the_whole_domain_awake() {
 /// Steady-state drawbar pull, torque and sinkage (means over the second half of 0.3 s) of a
 /// wheel at 30 % slip on a 1.1 m bed (d0 = 12.5 mm: the two runs are compared with each other,
 /// not with a closed form; at 1 cm they agreed to 0.03 %, here to 1e-5, in a third of the time:
-/// 57 s against 161 s in the suite): at the
-/// default margin (2h + one wheel size) its box is 0.72 m long, so about a third of the bed
-/// sleeps.
+/// 57 s against 161 s in the suite): at the default margin (2h + one wheel size) its box is
+/// 0.72 m long, so about a third of the bed sleeps.
 fn wheel_run(active: bool) -> (f64, f64, f64, serde_json::Value) {
     let a = if active { "\n[sph.active]\nenabled = true\n" } else { "" };
     let text = format!(
