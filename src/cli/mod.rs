@@ -602,6 +602,57 @@ pub struct SweepArgs {
     pub quiet: bool,
 }
 
+/// `regolith bench`: which bench and how it is timed.
+#[derive(Debug, Clone, clap::Args)]
+pub struct BenchArgs {
+    /// Which bench: the soil block, the sand column, or a wheel at 30 % slip on a long bed.
+    #[arg(long, value_enum, default_value_t = BenchSceneArg::Block)]
+    pub scene: BenchSceneArg,
+    /// wheel-long only: run with the active region on, off, or both (the ratio in one run).
+    #[arg(long, value_enum)]
+    pub active: Option<ActiveArg>,
+    /// wheel-long and rover-patch only: bed length (m; default 10 and 20).
+    #[arg(long, value_name = "M")]
+    pub length: Option<f64>,
+    /// wheel-long: also time the wheel on a moving patch of this length (m), without the
+    /// active region and (unless `--active off`) with it, against the whole bed;
+    /// rover-patch: the patch's length (default 3 m).
+    #[arg(long, value_name = "M")]
+    pub patch: Option<f64>,
+    /// Verlet skins of the neighbour lists to time, multiples of h, comma-separated (e.g.
+    /// `0,0.3`: rebuilt every step against reused lists, in one run); default: the scene
+    /// default.
+    #[arg(long, value_name = "S,…", value_delimiter = ',')]
+    pub skin: Vec<f64>,
+    /// block only: soil particles (about; default 100 000).
+    #[arg(long, value_name = "N")]
+    pub particles: Option<usize>,
+    /// block only: rheology, dp, mcc or both (default both).
+    #[arg(long, value_enum)]
+    pub model: Option<BenchModelArg>,
+    /// Backend.
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
+    /// Precision.
+    #[arg(long, value_enum, default_value_t = Precision::F32)]
+    pub precision: Precision,
+    /// Timed steps (exchanges of 1 ms for wheel-long and rover-patch); default 40, rover-patch
+    /// 200.
+    #[arg(long, value_name = "N")]
+    pub steps: Option<u64>,
+    /// Untimed warm-up steps (exchanges for wheel-long and rover-patch); default 5,
+    /// rover-patch 150 (the rover settles and its wheels spin up).
+    #[arg(long, value_name = "N")]
+    pub warmup: Option<u64>,
+    /// Also write the results as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Time carving a 100 000-triangle closed mesh out of a 1 M-point lattice (what a mesh
+    /// body costs at scene start) instead of the soil block.
+    #[arg(long)]
+    pub carve: bool,
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -696,54 +747,7 @@ pub enum Command {
     },
     /// Time a fixed granular block collapse (particle-steps/s, neighbour interactions/s), or a
     /// wheel crossing a long bed with and without an active region (`--scene wheel-long`).
-    Bench {
-        /// Which bench: the soil block, the sand column, or a wheel at 30 % slip on a long bed.
-        #[arg(long, value_enum, default_value_t = BenchSceneArg::Block)]
-        scene: BenchSceneArg,
-        /// wheel-long only: run with the active region on, off, or both (the ratio in one run).
-        #[arg(long, value_enum)]
-        active: Option<ActiveArg>,
-        /// wheel-long and rover-patch only: bed length (m; default 10 and 20).
-        #[arg(long, value_name = "M")]
-        length: Option<f64>,
-        /// wheel-long: also time the wheel on a moving patch of this length (m), without the
-        /// active region and (unless `--active off`) with it, against the whole bed;
-        /// rover-patch: the patch's length (default 3 m).
-        #[arg(long, value_name = "M")]
-        patch: Option<f64>,
-        /// Verlet skins of the neighbour lists to time, multiples of h, comma-separated (e.g.
-        /// `0,0.3`: rebuilt every step against reused lists, in one run); default: the scene
-        /// default.
-        #[arg(long, value_name = "S,…", value_delimiter = ',')]
-        skin: Vec<f64>,
-        /// block only: soil particles (about; default 100 000).
-        #[arg(long, value_name = "N")]
-        particles: Option<usize>,
-        /// block only: rheology, dp, mcc or both (default both).
-        #[arg(long, value_enum)]
-        model: Option<BenchModelArg>,
-        /// Backend.
-        #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
-        backend: BackendArg,
-        /// Precision.
-        #[arg(long, value_enum, default_value_t = Precision::F32)]
-        precision: Precision,
-        /// Timed steps (exchanges of 1 ms for wheel-long and rover-patch); default 40, rover-patch
-        /// 200.
-        #[arg(long, value_name = "N")]
-        steps: Option<u64>,
-        /// Untimed warm-up steps (exchanges for wheel-long and rover-patch); default 5,
-        /// rover-patch 150 (the rover settles and its wheels spin up).
-        #[arg(long, value_name = "N")]
-        warmup: Option<u64>,
-        /// Also write the results as JSON to this file.
-        #[arg(long, value_name = "FILE")]
-        json: Option<PathBuf>,
-        /// Time carving a 100 000-triangle closed mesh out of a 1 M-point lattice (what a mesh
-        /// body costs at scene start) instead of the soil block.
-        #[arg(long)]
-        carve: bool,
-    },
+    Bench(BenchArgs),
     /// Parse and validate a scene file and print what would run.
     Check {
         /// Scene file (TOML).
@@ -772,20 +776,46 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             })
         }
         Command::Check { scene, sets } => check::run(&scene, &sets),
-        Command::Bench { carve: true, skin, .. } if !skin.is_empty() => {
+        Command::Bench(a) => bench_cmd(a),
+        Command::Run { scene, out, backend, precision, sets, slips, quiet } => {
+            let mut sets = sets;
+            if let Some(s) = slips {
+                sets.push((
+                    "rig.slips".to_string(),
+                    toml::Value::Array(s.into_iter().map(toml::Value::Float).collect()),
+                ));
+            }
+            run::run(&scene, out.as_deref(), backend, precision, &sets, quiet)
+        }
+        Command::Inspect { recording } => inspect::run(&recording),
+        Command::Sweep { sub: Some(SweepCommand::Merge { dir }), .. } => sweep::merge(&dir),
+        Command::Sweep { sub: Some(SweepCommand::Converge { dir, over, metric }), .. } => {
+            sweep::converge(&dir, &over, &metric)
+        }
+        Command::Sweep { sub: None, args } => sweep::run(args),
+        Command::Calibrate { calibrate } => calibrate_cmd(calibrate),
+        Command::Study { study } => study_cmd(study),
+    }
+}
+
+/// `regolith bench`: the flags each bench takes are checked here, each wrong one a one-line
+/// error naming it.
+fn bench_cmd(args: BenchArgs) -> Result<(), Failure> {
+    match args {
+        BenchArgs { carve: true, skin, .. } if !skin.is_empty() => {
             Err(InputError::flag("--skin", "does not apply to --carve".to_string()).into())
         }
-        Command::Bench { carve: true, json, .. } => bench::carve(json.as_deref()),
-        Command::Bench { scene: BenchSceneArg::WheelLong | BenchSceneArg::RoverPatch, precision, .. }
+        BenchArgs { carve: true, json, .. } => bench::carve(json.as_deref()),
+        BenchArgs { scene: BenchSceneArg::WheelLong | BenchSceneArg::RoverPatch, precision, .. }
             if precision != Precision::F32 =>
         {
             Err(InputError::flag("--precision", "wheel-long and rover-patch run in f32 only".to_string()).into())
         }
-        Command::Bench { scene: BenchSceneArg::RoverPatch, backend, .. } if backend != BackendArg::Cpu => {
+        BenchArgs { scene: BenchSceneArg::RoverPatch, backend, .. } if backend != BackendArg::Cpu => {
             Err(InputError::flag("--backend", "rover-patch times the CPU backend only: use --backend cpu".to_string())
                 .into())
         }
-        Command::Bench { scene: BenchSceneArg::WheelLong, particles, model, .. }
+        BenchArgs { scene: BenchSceneArg::WheelLong, particles, model, .. }
             if particles.is_some() || model.is_some() =>
         {
             Err(InputError::flag(
@@ -794,7 +824,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             )
             .into())
         }
-        Command::Bench {
+        BenchArgs {
             scene: BenchSceneArg::WheelLong,
             active,
             backend,
@@ -818,7 +848,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             warmup.unwrap_or(5),
             json.as_deref(),
         ),
-        Command::Bench { scene: BenchSceneArg::RoverPatch, particles, model, active, skin, .. }
+        BenchArgs { scene: BenchSceneArg::RoverPatch, particles, model, active, skin, .. }
             if particles.is_some() || model.is_some() || active.is_some() || !skin.is_empty() =>
         {
             Err(InputError::flag(
@@ -836,16 +866,16 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             )
             .into())
         }
-        Command::Bench {
-            scene: BenchSceneArg::RoverPatch, length, patch, steps, warmup, json, carve: false, ..
-        } => bench::rover_patch(
-            length.unwrap_or(20.0),
-            patch.unwrap_or(3.0),
-            steps.unwrap_or(200),
-            warmup.unwrap_or(150),
-            json.as_deref(),
-        ),
-        Command::Bench { active, length, patch, .. } if active.is_some() || length.is_some() || patch.is_some() => {
+        BenchArgs { scene: BenchSceneArg::RoverPatch, length, patch, steps, warmup, json, carve: false, .. } => {
+            bench::rover_patch(
+                length.unwrap_or(20.0),
+                patch.unwrap_or(3.0),
+                steps.unwrap_or(200),
+                warmup.unwrap_or(150),
+                json.as_deref(),
+            )
+        }
+        BenchArgs { active, length, patch, .. } if active.is_some() || length.is_some() || patch.is_some() => {
             Err(InputError::flag(
                 if active.is_some() {
                     "--active"
@@ -863,16 +893,14 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             )
             .into())
         }
-        Command::Bench { scene: BenchSceneArg::Column, particles, model, .. }
-            if particles.is_some() || model.is_some() =>
-        {
+        BenchArgs { scene: BenchSceneArg::Column, particles, model, .. } if particles.is_some() || model.is_some() => {
             Err(InputError::flag(
                 if particles.is_some() { "--particles" } else { "--model" },
                 "applies to --scene block only (the column is fixed: 67 626 particles, Drucker-Prager)".to_string(),
             )
             .into())
         }
-        Command::Bench {
+        BenchArgs {
             scene: bench_kind,
             particles,
             model,
@@ -893,44 +921,29 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             warmup.unwrap_or(5),
             json.as_deref(),
         ),
-        Command::Run { scene, out, backend, precision, sets, slips, quiet } => {
-            let mut sets = sets;
-            if let Some(s) = slips {
-                sets.push((
-                    "rig.slips".to_string(),
-                    toml::Value::Array(s.into_iter().map(toml::Value::Float).collect()),
-                ));
-            }
-            run::run(&scene, out.as_deref(), backend, precision, &sets, quiet)
-        }
-        Command::Inspect { recording } => inspect::run(&recording),
-        Command::Sweep { sub: Some(SweepCommand::Merge { dir }), .. } => sweep::merge(&dir),
-        Command::Sweep { sub: Some(SweepCommand::Converge { dir, over, metric }), .. } => {
-            sweep::converge(&dir, &over, &metric)
-        }
-        Command::Sweep { sub: None, args } => sweep::run(args),
-        Command::Calibrate { calibrate: CalibrateCommand::Envelope { tests, out } } => calibrate::envelope(tests, out),
-        Command::Calibrate { calibrate: CalibrateCommand::Mcc { isotropic, critical, base, out } } => {
-            calibrate::mcc(isotropic, critical, base, out)
-        }
-        Command::Calibrate {
-            calibrate:
-                CalibrateCommand::Repose {
-                    material,
-                    radius,
-                    height,
-                    spacing,
-                    lift_speed,
-                    relax_time,
-                    slices,
-                    cells,
-                    cell_radius,
-                    precision,
-                    target_angle,
-                    tolerance,
-                    sets,
-                    out,
-                },
+    }
+}
+
+/// `regolith calibrate …`.
+fn calibrate_cmd(calibrate: CalibrateCommand) -> Result<(), Failure> {
+    match calibrate {
+        CalibrateCommand::Envelope { tests, out } => calibrate::envelope(tests, out),
+        CalibrateCommand::Mcc { isotropic, critical, base, out } => calibrate::mcc(isotropic, critical, base, out),
+        CalibrateCommand::Repose {
+            material,
+            radius,
+            height,
+            spacing,
+            lift_speed,
+            relax_time,
+            slices,
+            cells,
+            cell_radius,
+            precision,
+            target_angle,
+            tolerance,
+            sets,
+            out,
         } => {
             let mut s = ReposeSettings::for_radius(radius);
             s.sets = sets;
@@ -954,21 +967,21 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             };
             calibrate::repose(material, s, target_angle, tolerance, out)
         }
-        Command::Calibrate { calibrate: CalibrateCommand::Cone { scene, sets, layer, resume, out } } => {
+        CalibrateCommand::Cone { scene, sets, layer, resume, out } => {
             let sets = sets
                 .iter()
                 .map(|s| crate::scene::parse_set(s).map_err(|m| InputError::flag("--set", m)))
                 .collect::<Result<Vec<_>, _>>()?;
             calibrate::cone(crate::calibrate::cone::ConeInputs { scene, sets, layer, out, resume })
         }
-        Command::Calibrate { calibrate: CalibrateCommand::Plate(a) } => {
+        CalibrateCommand::Plate(a) => {
             if a.runner.runner == RunnerArg::Ray {
                 return batch::ray(&a.runner, "calibrate plate");
             }
             batch::threads_only(&a.runner)?;
             calibrate::plate(a.inputs()?)
         }
-        Command::Calibrate { calibrate: CalibrateCommand::Triaxial(a) } => {
+        CalibrateCommand::Triaxial(a) => {
             if a.runner.runner == RunnerArg::Ray {
                 batch::no_loop_on_ray(&a)?;
                 return batch::ray(&a.runner, "calibrate triaxial");
@@ -976,7 +989,13 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             batch::threads_only(&a.runner)?;
             calibrate::triaxial(a.inputs()?)
         }
-        Command::Study { study: StudyCommand::Darcy { spacings, drag, backend, out } } => {
+    }
+}
+
+/// `regolith study …`.
+fn study_cmd(study: StudyCommand) -> Result<(), Failure> {
+    match study {
+        StudyCommand::Darcy { spacings, drag, backend, out } => {
             // Without an adapter the first point says so in one line (`darcy_point_on`).
             let backend = match backend {
                 StudyBackendArg::Cpu => crate::scene::Backend::Cpu,
@@ -1000,14 +1019,14 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             println!("table in {}", out.join("darcy.md").display());
             Ok(())
         }
-        Command::Study { study: StudyCommand::Stability(a) } => {
+        StudyCommand::Stability(a) => {
             if a.runner.runner == RunnerArg::Ray {
                 return batch::ray(&a.runner, "study stability");
             }
             batch::threads_only(&a.runner)?;
             study::stability_cmd(&a.options())
         }
-        Command::Study { study: StudyCommand::Accuracy { cases, budget, cases_dir, out, runner } } => {
+        StudyCommand::Accuracy { cases, budget, cases_dir, out, runner } => {
             if runner.resume {
                 return Err(InputError::flag(
                     "--resume",

@@ -25,9 +25,30 @@ fn volume(r: &SoilRegion) -> f64 {
     }
 }
 
-/// A human-readable description of what the scene would run.
+/// A human-readable description of what the scene would run: one line (or a few) per part of
+/// the scene, in the order the sections below write them.
 pub fn describe(scene: &Scene) -> String {
     let mut s = String::new();
+    write_run(&mut s, scene);
+    let min_dt = write_materials(&mut s, scene);
+    let particles = write_soil(&mut s, scene);
+    let walls = write_container(&mut s, scene);
+    write_bodies(&mut s, scene);
+    for v in &scene.vehicles {
+        write_vehicle(&mut s, v);
+    }
+    if let Some(r) = &scene.rig {
+        write_rig(&mut s, scene, r);
+    }
+    write_recording(&mut s, scene);
+    write_size(&mut s, scene, particles, walls, min_dt);
+    write_effects(&mut s, scene);
+    s
+}
+
+/// The run, time stepping, SPH settings, neighbour lists and the effects the solver is
+/// specialised for (the wgpu pipeline's constants and modules, the CPU backend's loops).
+fn write_run(s: &mut String, scene: &Scene) {
     let sv = &scene.solver;
     let _ = writeln!(s, "scene {}", scene.path.display());
     let _ = writeln!(
@@ -90,6 +111,11 @@ pub fn describe(scene: &Scene) -> String {
     effects.push(&fs);
     effects.push(&fsi);
     let _ = writeln!(s, "  effects: {}", effects.join(", "));
+}
+
+/// One line per material; returns the smallest h / c over them (s), the stable step's scale.
+fn write_materials(s: &mut String, scene: &Scene) -> f64 {
+    let sv = &scene.solver;
     let mut min_dt = f64::INFINITY;
     for m in &scene.materials {
         let Ok(mat) = m.params.build::<f64>() else { continue };
@@ -126,6 +152,13 @@ pub fn describe(scene: &Scene) -> String {
             c
         );
     }
+    min_dt
+}
+
+/// One line per soil region and the moving patch; returns about how many particles the
+/// solver holds.
+fn write_soil(s: &mut String, scene: &Scene) -> f64 {
+    let sv = &scene.solver;
     let d3 = sv.spacing.powi(3);
     let mut total = 0.0;
     for spec in &scene.soil {
@@ -154,6 +187,12 @@ pub fn describe(scene: &Scene) -> String {
             p.length, p.trigger
         );
     }
+    total
+}
+
+/// The container and its walls; returns about how many wall markers it holds.
+fn write_container(s: &mut String, scene: &Scene) -> f64 {
+    let sv = &scene.solver;
     let mut walls = 0.0;
     if let Some(c) = scene.container
         && !scene.container_walls
@@ -177,7 +216,12 @@ pub fn describe(scene: &Scene) -> String {
             c.min, c.max, sv.bce_layers, walls
         );
     }
-    let mut markers = 0usize;
+    walls
+}
+
+/// One line per rigid body: shape, mass, pose, motion and soil contact.
+fn write_bodies(s: &mut String, scene: &Scene) {
+    let sv = &scene.solver;
     for b in &scene.bodies {
         let n = if b.fsi {
             regolith_coupling::shape_markers(
@@ -191,7 +235,6 @@ pub fn describe(scene: &Scene) -> String {
         } else {
             0
         };
-        markers += n;
         let motion = match &b.desc.motion {
             regolith_rigid::Motion::Free => "free".to_string(),
             regolith_rigid::Motion::Fixed => "fixed".to_string(),
@@ -220,92 +263,95 @@ pub fn describe(scene: &Scene) -> String {
             }
         );
     }
-    for v in &scene.vehicles {
-        let m = &v.model;
-        let wheels: Vec<String> = v
-            .wheels
-            .iter()
-            .map(|w| {
-                format!(
-                    "{} (R = {} m, {})",
-                    m.links[w.link].name,
-                    w.radius,
-                    if w.side > 0.0 { "left" } else { "right" }
-                )
-            })
-            .collect();
-        let _ = writeln!(
-            s,
-            "  vehicle \"{}\": {} ({} links, {} joints, {:.3} kg), wheels {}; {}; {}",
-            v.name,
-            m.path.display(),
-            m.links.len(),
-            m.joints.len(),
-            m.mass(),
-            if wheels.is_empty() { "none".to_string() } else { wheels.join(", ") },
-            if v.drive.is_empty() {
-                "not driven".to_string()
-            } else {
-                format!("{} wheel motors (≤ {} N m), {} steering joints", v.drive.len(), v.max_torque, v.steering.len())
-            },
-            if v.place_on_soil { "lowered onto the soil" } else { "at the given height" }
-        );
-        // Links lumped by fixed joints, under the link that carries them.
-        for (li, l) in m.links.iter().enumerate() {
-            let lumped: Vec<&str> = m.frames.iter().filter(|f| f.link == li).map(|f| f.name.as_str()).collect();
-            if !lumped.is_empty() {
-                let _ = writeln!(
-                    s,
-                    "    {} carries the links fixed to it: {} ({:.3} kg in all)",
-                    l.name,
-                    lumped.join(", "),
-                    l.mass
-                );
-            }
-        }
-        if let Some(d) = &v.differential {
+}
+
+/// A vehicle: its model, wheels, drive, lumped links, differential and what was substituted.
+fn write_vehicle(s: &mut String, v: &super::VehicleSpec) {
+    let m = &v.model;
+    let wheels: Vec<String> = v
+        .wheels
+        .iter()
+        .map(|w| {
+            format!("{} (R = {} m, {})", m.links[w.link].name, w.radius, if w.side > 0.0 { "left" } else { "right" })
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "  vehicle \"{}\": {} ({} links, {} joints, {:.3} kg), wheels {}; {}; {}",
+        v.name,
+        m.path.display(),
+        m.links.len(),
+        m.joints.len(),
+        m.mass(),
+        if wheels.is_empty() { "none".to_string() } else { wheels.join(", ") },
+        if v.drive.is_empty() {
+            "not driven".to_string()
+        } else {
+            format!("{} wheel motors (≤ {} N m), {} steering joints", v.drive.len(), v.max_torque, v.steering.len())
+        },
+        if v.place_on_soil { "lowered onto the soil" } else { "at the given height" }
+    );
+    // Links lumped by fixed joints, under the link that carries them.
+    for (li, l) in m.links.iter().enumerate() {
+        let lumped: Vec<&str> = m.frames.iter().filter(|f| f.link == li).map(|f| f.name.as_str()).collect();
+        if !lumped.is_empty() {
             let _ = writeln!(
                 s,
-                "    differential: `{}` and `{}` turn by equal and opposite angles about `{}`",
-                m.joints[d.left].name, m.joints[d.right].name, m.links[m.joints[d.left].parent].name
+                "    {} carries the links fixed to it: {} ({:.3} kg in all)",
+                l.name,
+                lumped.join(", "),
+                l.mass
             );
         }
-        for sub in &m.substitutions {
-            let _ = writeln!(s, "    substitution {sub}");
-        }
-        for u in &m.unsupported {
-            let _ = writeln!(s, "  warning: vehicle \"{}\": {u}", v.name);
-        }
     }
-    if let Some(r) = &scene.rig {
-        let line = match r {
-            super::RigSpec::Plate { body, control, depth, sizes } => format!(
-                "plate sinkage on \"{}\", {}, to {depth} m{}",
-                scene.bodies[*body].desc.name,
-                match control {
-                    super::PlateControl::Speed(v) => format!("pushed at {v} m/s"),
-                    super::PlateControl::Load(f) => format!("loaded with {f} N"),
-                },
-                if sizes.is_empty() { String::new() } else { format!(", plate sizes {sizes:?} m") }
-            ),
-            super::RigSpec::Cone { body, speed, depth } => format!(
-                "cone penetrometer \"{}\" pushed at {speed} m/s to a base depth of {depth} m",
-                scene.bodies[*body].desc.name
-            ),
-            super::RigSpec::Wheel { body, load, angular_velocity, drive, .. } => format!(
-                "single wheel \"{}\", load {load} N, ω = {angular_velocity} rad/s, {}",
-                scene.bodies[*body].desc.name,
-                match drive {
-                    super::WheelDrive::Slips(s) => format!("slips {s:?} ({} runs of {} s)", s.len(), scene.end_time),
-                    super::WheelDrive::Tow(f) => format!("towed with {f} N"),
-                    super::WheelDrive::Slopes(s) => {
-                        format!("up slopes {s:?}° ({} runs of {} s, gravity tilted about y)", s.len(), scene.end_time)
-                    }
+    if let Some(d) = &v.differential {
+        let _ = writeln!(
+            s,
+            "    differential: `{}` and `{}` turn by equal and opposite angles about `{}`",
+            m.joints[d.left].name, m.joints[d.right].name, m.links[m.joints[d.left].parent].name
+        );
+    }
+    for sub in &m.substitutions {
+        let _ = writeln!(s, "    substitution {sub}");
+    }
+    for u in &m.unsupported {
+        let _ = writeln!(s, "  warning: vehicle \"{}\": {u}", v.name);
+    }
+}
+
+/// The rig and what it drives.
+fn write_rig(s: &mut String, scene: &Scene, r: &super::RigSpec) {
+    let line = match r {
+        super::RigSpec::Plate { body, control, depth, sizes } => format!(
+            "plate sinkage on \"{}\", {}, to {depth} m{}",
+            scene.bodies[*body].desc.name,
+            match control {
+                super::PlateControl::Speed(v) => format!("pushed at {v} m/s"),
+                super::PlateControl::Load(f) => format!("loaded with {f} N"),
+            },
+            if sizes.is_empty() { String::new() } else { format!(", plate sizes {sizes:?} m") }
+        ),
+        super::RigSpec::Cone { body, speed, depth } => format!(
+            "cone penetrometer \"{}\" pushed at {speed} m/s to a base depth of {depth} m",
+            scene.bodies[*body].desc.name
+        ),
+        super::RigSpec::Wheel { body, load, angular_velocity, drive, .. } => format!(
+            "single wheel \"{}\", load {load} N, ω = {angular_velocity} rad/s, {}",
+            scene.bodies[*body].desc.name,
+            match drive {
+                super::WheelDrive::Slips(s) => format!("slips {s:?} ({} runs of {} s)", s.len(), scene.end_time),
+                super::WheelDrive::Tow(f) => format!("towed with {f} N"),
+                super::WheelDrive::Slopes(s) => {
+                    format!("up slopes {s:?}° ({} runs of {} s, gravity tilted about y)", s.len(), scene.end_time)
                 }
-            ),
-        };
-        let _ = writeln!(s, "  rig: {line}; the rig body starts in contact with the soil");
-    }
+            }
+        ),
+    };
+    let _ = writeln!(s, "  rig: {line}; the rig body starts in contact with the soil");
+}
+
+/// The coupling interval and the recording.
+fn write_recording(s: &mut String, scene: &Scene) {
     if !scene.bodies.is_empty() {
         let _ =
             writeln!(s, "  coupling: soil and bodies exchange state and wrenches every {} s", scene.exchange_interval);
@@ -324,6 +370,11 @@ pub fn describe(scene: &Scene) -> String {
     } else {
         let _ = writeln!(s, "  recording: off (output.mcap = false)");
     }
+}
+
+/// The problem's size: particles, markers, memory, the step and the step count.
+fn write_size(s: &mut String, scene: &Scene, total: f64, walls: f64, min_dt: f64) {
+    let sv = &scene.solver;
     let dt_est = match sv.time_step {
         TimeStep::Fixed(dt) => dt,
         TimeStep::Adaptive { cfl, max } => (cfl * min_dt).min(max),
@@ -338,6 +389,11 @@ pub fn describe(scene: &Scene) -> String {
         "  size: about {:.0} soil particles + {:.0} wall markers, about {:.0} MiB; dt ≈ {:.2e} s, about {:.0} steps",
         total, walls, mem, dt_est, steps
     );
+}
+
+/// The physics switched on, and the water's coupling when there is water.
+fn write_effects(s: &mut String, scene: &Scene) {
+    let sv = &scene.solver;
     let mut models: Vec<&str> = scene.materials.iter().filter_map(|m| m.params.model).map(|k| k.name()).collect();
     models.sort_unstable();
     models.dedup();
@@ -376,8 +432,6 @@ pub fn describe(scene: &Scene) -> String {
             }
         );
     }
-    let _ = markers;
-    s
 }
 
 fn shape_name(s: &regolith_rigid::ShapeDesc) -> String {
