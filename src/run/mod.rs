@@ -13,7 +13,7 @@ use std::path::PathBuf;
 
 use regolith_fsi::Real;
 
-use crate::driver::{Driver, Observer, Progress};
+use crate::driver::{Driver, Observer, Progress, RunStats};
 use crate::output::DRAWS_PLOTS;
 #[cfg(feature = "mcap")]
 use crate::output::Recorder;
@@ -145,14 +145,13 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
     driver.finish()?;
     let stats = driver.stats.clone();
     drop(driver);
-    let Ran { sim, series, rig, bekker, mut figures, initial } = ran;
+    let Ran { sim, series, rig, bekker, figures, initial } = ran;
     let series = series.or_else(|| initial.is_some().then_some(terrain_series.0));
     let mut outputs = Vec::new();
     #[cfg(feature = "mcap")]
     if let Some(r) = &recorder {
         outputs.push(r.path().to_path_buf());
     }
-    let wall = stats.elapsed();
     let fluid = sim.as_ref().map(|s| s.system.fluid.as_ref());
     // The soil at the start and at the end, by id and as plain positions (what the runout and
     // the deposit profile read), for the scenes that sampled the start.
@@ -162,7 +161,45 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
         (Some(i), Some(l)) => Some((positions(i), positions(l))),
         _ => None,
     };
-    let mut summary = Summary {
+    let soil = SoilEnds { initial: initial.as_deref(), last: last_soil.as_deref(), ends: ends.as_ref() };
+    let mut summary = summarise(scene, sim.as_ref(), &stats, &soil, failure.as_ref(), rig, bekker);
+    if let Some(f) = fluid {
+        let p = opts.out.join("particles_final.csv");
+        write_particles_csv(&p, f)?;
+        outputs.push(p);
+    }
+    write_outputs(scene, opts, &mut summary, series.as_ref(), figures, ends.as_ref(), outputs)?;
+    match (failure, interrupted) {
+        (Some(e), _) => Err(e),
+        (None, Some(time)) => Err(RunError::Interrupted { time }),
+        (None, None) => Ok(summary),
+    }
+}
+
+/// The soil's particle positions at the start and at the end of a run.
+type Ends = (Vec<[f64; 3]>, Vec<[f64; 3]>);
+
+/// The soil by particle id at the start and at the end, and as plain positions, of a run
+/// that sampled the start (scenes without a rig).
+struct SoilEnds<'a> {
+    initial: Option<&'a [(u32, [f64; 3])]>,
+    last: Option<&'a [(u32, [f64; 3])]>,
+    ends: Option<&'a Ends>,
+}
+
+/// `summary.json`'s content, but for the list of outputs (`write_outputs` fills it).
+fn summarise<T: Real>(
+    scene: &Scene,
+    sim: Option<&Simulation<T>>,
+    stats: &RunStats,
+    soil: &SoilEnds<'_>,
+    failure: Option<&RunError>,
+    rig: Option<serde_json::Value>,
+    bekker: Option<crate::rig::bekker::BekkerFit>,
+) -> Summary {
+    let wall = stats.elapsed();
+    let fluid = sim.map(|s| s.system.fluid.as_ref());
+    Summary {
         schema_version: SUMMARY_SCHEMA_VERSION,
         scene: scene.path.display().to_string(),
         backend: fluid.map_or_else(|| "cpu".into(), |f| f.backend().into()),
@@ -172,7 +209,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
         markers: fluid.map_or(0, |f| f.marker_positions().len()),
         steps: stats.steps,
         particle_steps: stats.particle_steps,
-        sim_time: sim.as_ref().map_or(0.0, |s| s.time()),
+        sim_time: sim.map_or(0.0, |s| s.time()),
         wall_time_s: wall,
         particle_steps_per_s: if wall > 0.0 { stats.particle_steps / wall } else { 0.0 },
         neighbour_pairs: if stats.steps > 0 { stats.pairs / stats.steps as f64 } else { 0.0 },
@@ -195,7 +232,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
             }),
             _ => None,
         },
-        patch: sim.as_ref().and_then(|s| s.patch()).map(|p| {
+        patch: sim.and_then(|s| s.patch()).map(|p| {
             let (advances, lifted, laid) = p.counts();
             summary::PatchSummary {
                 length: p.spec().length,
@@ -207,7 +244,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
             }
         }),
         nan_detected: matches!(
-            &failure,
+            failure,
             Some(RunError::Failed { cause: regolith_fsi::SolverError::NonFinite { .. }, .. })
                 | Some(RunError::Failed {
                     cause: regolith_fsi::SolverError::Rheology {
@@ -218,37 +255,45 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
                 })
         ),
         error: failure.as_ref().map(|e| e.to_string()),
-        runout: ends.as_ref().and_then(|(i, l)| summary::column_runout(scene, i, l)),
-        slump: match (&initial, &last_soil) {
+        runout: soil.ends.and_then(|(i, l)| summary::column_runout(scene, i, l)),
+        slump: match (soil.initial, soil.last) {
             (Some(i), Some(l)) => summary::slump(scene, i, l),
             _ => None,
         },
-        geostatic: match (fluid, &initial) {
+        geostatic: match (fluid, soil.initial) {
             (Some(f), Some(_)) => summary::geostatic_state(scene, f),
             _ => None,
         },
-        bodies: sim.as_ref().map(body_summaries).unwrap_or_default(),
+        bodies: sim.map(body_summaries).unwrap_or_default(),
         rig,
         bekker,
         outputs: Vec::new(),
-        notes: sim.as_ref().map(|s| s.terrain.notes.clone()).unwrap_or_default(),
-    };
-    if let Some(f) = fluid {
-        let p = opts.out.join("particles_final.csv");
-        write_particles_csv(&p, f)?;
-        outputs.push(p);
+        notes: sim.map(|s| s.terrain.notes.clone()).unwrap_or_default(),
     }
-    if let Some(s) = &series {
+}
+
+/// Writes `series.csv`, the figures (the rig's, each vehicle's, the deposit profile) and
+/// `summary.json`, whose list of outputs ends with them after `outputs`.
+fn write_outputs(
+    scene: &Scene,
+    opts: &RunOptions,
+    summary: &mut Summary,
+    series: Option<&crate::output::Series>,
+    mut figures: Vec<(String, crate::output::Figure)>,
+    ends: Option<&Ends>,
+    mut outputs: Vec<PathBuf>,
+) -> Result<(), RunError> {
+    if let Some(s) = series {
         let p = opts.out.join("series.csv");
         s.write(&p)?;
         outputs.push(p);
     }
-    if let (Some(ser), None) = (&series, &scene.rig) {
+    if let (Some(ser), None) = (series, &scene.rig) {
         for v in &scene.vehicles {
             figures.push((format!("vehicle_{}", v.name), figures::vehicle_figure(ser, v)));
         }
     }
-    if let Some((i, l)) = &ends {
+    if let Some((i, l)) = ends {
         let axis = summary.runout.as_ref().map(|r| r.axis);
         figures.push(("deposit_profile".into(), figures::deposit_profile(scene, i, l, axis)));
     }
@@ -263,11 +308,7 @@ fn run_t<T: Real>(scene: &Scene, opts: &RunOptions, extra: &mut dyn Observer<T>)
     outputs.push(summary_path.clone());
     summary.outputs = outputs.iter().map(|p| p.display().to_string()).collect();
     write_json(&summary_path, &summary)?;
-    match (failure, interrupted) {
-        (Some(e), _) => Err(e),
-        (None, Some(time)) => Err(RunError::Interrupted { time }),
-        (None, None) => Ok(summary),
-    }
+    Ok(())
 }
 
 fn body_summaries<T: Real>(s: &Simulation<T>) -> Vec<BodySummary> {
