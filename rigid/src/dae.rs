@@ -38,116 +38,43 @@ fn numbers<T: std::str::FromStr>(path: &Path, text: &str, what: &str) -> Result<
         .collect()
 }
 
+/// What the parse has gathered so far.
+#[derive(Default)]
+struct Collada {
+    /// `<unit meter>`: metres per file unit.
+    unit: f64,
+    /// The `<source>` and `<vertices>` being read, and the `<node>` (for its transforms).
+    source_id: String,
+    vertices_id: String,
+    node: String,
+    float_arrays: HashMap<String, Vec<f64>>,
+    /// The POSITION source of each `<vertices>`.
+    position_of: HashMap<String, String>,
+    prims: Vec<Primitive>,
+}
+
 /// Reads the triangles of a `.dae` file (m).
 pub fn read(path: &Path, bytes: &[u8]) -> Result<TriangleMesh, MeshError> {
     let text = std::str::from_utf8(bytes).map_err(|_| err(path, None, "not UTF-8 text (COLLADA is XML)"))?;
     let mut reader = Reader::from_str(text);
     let mut stack: Vec<String> = Vec::new();
-    let mut unit = 1.0;
-    let mut source_id = String::new();
-    let mut float_arrays: HashMap<String, Vec<f64>> = HashMap::new();
-    let mut vertices_id = String::new();
-    let mut position_of: HashMap<String, String> = HashMap::new();
-    let mut prims: Vec<Primitive> = Vec::new();
-    let mut node = String::new();
+    let mut c = Collada { unit: 1.0, ..Default::default() };
     let xml = |e: quick_xml::Error, pos: u64| err(path, None, format!("malformed XML at byte {pos}: {e}"));
     loop {
         let ev = reader.read_event().map_err(|e| xml(e, reader.buffer_position()))?;
-        let (start, empty) = match &ev {
-            Event::Start(e) => (Some(e.clone()), false),
-            Event::Empty(e) => (Some(e.clone()), true),
-            _ => (None, false),
-        };
-        if let Some(e) = start {
-            let name = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
-            match name.as_str() {
-                "unit" => {
-                    if let Some(m) = attr(&e, "meter") {
-                        unit = m.parse::<f64>().ok().filter(|u| *u > 0.0 && u.is_finite()).ok_or_else(|| {
-                            err(path, None, format!("<unit meter=\"{m}\"> must be a positive number"))
-                        })?;
-                    }
+        match &ev {
+            Event::Start(e) | Event::Empty(e) => {
+                let name = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
+                c.start(path, e, &name, stack.last().map(String::as_str).unwrap_or(""))?;
+                if matches!(ev, Event::Start(_)) {
+                    stack.push(name);
                 }
-                "source" => source_id = attr(&e, "id").unwrap_or_default(),
-                "vertices" => vertices_id = attr(&e, "id").unwrap_or_default(),
-                "node" => node = attr(&e, "name").or_else(|| attr(&e, "id")).unwrap_or_else(|| "(unnamed)".into()),
-                "triangles" | "polylist" | "polygons" => {
-                    prims.push(Primitive { kind: name.clone(), ..Default::default() });
-                }
-                "input" => {
-                    let semantic = attr(&e, "semantic").unwrap_or_default();
-                    let src = attr(&e, "source").unwrap_or_default().trim_start_matches('#').to_string();
-                    let parent = stack.last().map(String::as_str).unwrap_or("");
-                    if parent == "vertices" && semantic == "POSITION" {
-                        position_of.insert(vertices_id.clone(), src);
-                    } else if matches!(parent, "triangles" | "polylist" | "polygons")
-                        && let Some(p) = prims.last_mut()
-                    {
-                        let offset: usize = attr(&e, "offset").and_then(|o| o.parse().ok()).unwrap_or(0);
-                        p.stride = p.stride.max(offset + 1);
-                        if semantic == "VERTEX" {
-                            p.vertex_offset = offset;
-                            p.vertices_id = src;
-                        }
-                    }
-                }
-                _ => {}
             }
-            if !empty {
-                stack.push(name);
-            }
-            continue;
-        }
-        match ev {
             Event::Text(t) => {
                 let Some(top) = stack.last() else { continue };
                 let s = t.decode().map_err(|e| err(path, None, format!("text encoding: {e}")))?;
                 let parent = stack.len().checked_sub(2).map(|i| stack[i].as_str()).unwrap_or("");
-                match top.as_str() {
-                    "float_array" => {
-                        let v = numbers::<f64>(path, &s, &format!("float_array of source `{source_id}`"))?;
-                        float_arrays.entry(source_id.clone()).or_default().extend(v);
-                    }
-                    "vcount" => {
-                        if let Some(p) = prims.last_mut() {
-                            p.vcount.extend(numbers::<usize>(path, &s, "vcount")?);
-                        }
-                    }
-                    "p" if matches!(parent, "triangles" | "polylist" | "polygons") => {
-                        if let Some(p) = prims.last_mut() {
-                            let list = numbers::<usize>(path, &s, "<p> index list")?;
-                            if p.kind == "polygons" || p.p.is_empty() {
-                                p.p.push(list);
-                            } else {
-                                p.p[0].extend(list);
-                            }
-                        }
-                    }
-                    "matrix" | "translate" | "rotate" | "scale" if parent == "node" => {
-                        let v = numbers::<f64>(path, &s, &format!("<{top}> of node `{node}`"))?;
-                        let identity = match top.as_str() {
-                            "matrix" => {
-                                v.len() == 16
-                                    && v.iter()
-                                        .enumerate()
-                                        .all(|(i, x)| (x - if i % 5 == 0 { 1.0 } else { 0.0 }).abs() < 1e-9)
-                            }
-                            "translate" => v.iter().all(|x| x.abs() < 1e-12),
-                            "rotate" => v.len() == 4 && v[3].abs() < 1e-12,
-                            _ => v.iter().all(|x| (x - 1.0).abs() < 1e-12),
-                        };
-                        if !identity {
-                            return Err(err(
-                                path,
-                                None,
-                                format!(
-                                    "node `{node}` has a <{top}> transform; node transforms are not applied: export the mesh with transforms baked into the geometry"
-                                ),
-                            ));
-                        }
-                    }
-                    _ => {}
-                }
+                c.text(path, top, parent, &s)?;
             }
             Event::End(_) => {
                 stack.pop();
@@ -157,11 +84,107 @@ pub fn read(path: &Path, bytes: &[u8]) -> Result<TriangleMesh, MeshError> {
         }
     }
     let mut mesh = TriangleMesh::default();
-    for p in &prims {
-        let src = position_of.get(&p.vertices_id).ok_or_else(|| {
+    for p in &c.prims {
+        c.append(path, p, &mut mesh)?;
+    }
+    Ok(mesh)
+}
+
+impl Collada {
+    /// An opening (or empty) element `name` inside `parent`.
+    fn start(&mut self, path: &Path, e: &BytesStart<'_>, name: &str, parent: &str) -> Result<(), MeshError> {
+        match name {
+            "unit" => {
+                if let Some(m) = attr(e, "meter") {
+                    self.unit =
+                        m.parse::<f64>().ok().filter(|u| *u > 0.0 && u.is_finite()).ok_or_else(|| {
+                            err(path, None, format!("<unit meter=\"{m}\"> must be a positive number"))
+                        })?;
+                }
+            }
+            "source" => self.source_id = attr(e, "id").unwrap_or_default(),
+            "vertices" => self.vertices_id = attr(e, "id").unwrap_or_default(),
+            "node" => self.node = attr(e, "name").or_else(|| attr(e, "id")).unwrap_or_else(|| "(unnamed)".into()),
+            "triangles" | "polylist" | "polygons" => {
+                self.prims.push(Primitive { kind: name.to_string(), ..Default::default() });
+            }
+            "input" => {
+                let semantic = attr(e, "semantic").unwrap_or_default();
+                let src = attr(e, "source").unwrap_or_default().trim_start_matches('#').to_string();
+                if parent == "vertices" && semantic == "POSITION" {
+                    self.position_of.insert(self.vertices_id.clone(), src);
+                } else if matches!(parent, "triangles" | "polylist" | "polygons")
+                    && let Some(p) = self.prims.last_mut()
+                {
+                    let offset: usize = attr(e, "offset").and_then(|o| o.parse().ok()).unwrap_or(0);
+                    p.stride = p.stride.max(offset + 1);
+                    if semantic == "VERTEX" {
+                        p.vertex_offset = offset;
+                        p.vertices_id = src;
+                    }
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// The text `s` of element `top` inside `parent`: numbers, index lists, node transforms.
+    fn text(&mut self, path: &Path, top: &str, parent: &str, s: &str) -> Result<(), MeshError> {
+        match top {
+            "float_array" => {
+                let v = numbers::<f64>(path, s, &format!("float_array of source `{}`", self.source_id))?;
+                self.float_arrays.entry(self.source_id.clone()).or_default().extend(v);
+            }
+            "vcount" => {
+                if let Some(p) = self.prims.last_mut() {
+                    p.vcount.extend(numbers::<usize>(path, s, "vcount")?);
+                }
+            }
+            "p" if matches!(parent, "triangles" | "polylist" | "polygons") => {
+                if let Some(p) = self.prims.last_mut() {
+                    let list = numbers::<usize>(path, s, "<p> index list")?;
+                    if p.kind == "polygons" || p.p.is_empty() {
+                        p.p.push(list);
+                    } else {
+                        p.p[0].extend(list);
+                    }
+                }
+            }
+            "matrix" | "translate" | "rotate" | "scale" if parent == "node" => {
+                let node = &self.node;
+                let v = numbers::<f64>(path, s, &format!("<{top}> of node `{node}`"))?;
+                let identity = match top {
+                    "matrix" => {
+                        v.len() == 16
+                            && v.iter().enumerate().all(|(i, x)| (x - if i % 5 == 0 { 1.0 } else { 0.0 }).abs() < 1e-9)
+                    }
+                    "translate" => v.iter().all(|x| x.abs() < 1e-12),
+                    "rotate" => v.len() == 4 && v[3].abs() < 1e-12,
+                    _ => v.iter().all(|x| (x - 1.0).abs() < 1e-12),
+                };
+                if !identity {
+                    return Err(err(
+                        path,
+                        None,
+                        format!(
+                            "node `{node}` has a <{top}> transform; node transforms are not applied: export the mesh with transforms baked into the geometry"
+                        ),
+                    ));
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// Appends primitive `p`'s vertices (scaled to metres) and its triangles (polygons fanned).
+    fn append(&self, path: &Path, p: &Primitive, mesh: &mut TriangleMesh) -> Result<(), MeshError> {
+        let src = self.position_of.get(&p.vertices_id).ok_or_else(|| {
             err(path, None, format!("<{}> refers to vertices `{}` with no POSITION", p.kind, p.vertices_id))
         })?;
-        let floats = float_arrays
+        let floats = self
+            .float_arrays
             .get(src)
             .ok_or_else(|| err(path, None, format!("POSITION source `{src}` has no float_array")))?;
         if floats.len() % 3 != 0 {
@@ -171,6 +194,7 @@ pub fn read(path: &Path, bytes: &[u8]) -> Result<TriangleMesh, MeshError> {
                 format!("POSITION source `{src}` holds {} numbers, not a multiple of 3", floats.len()),
             ));
         }
+        let unit = self.unit;
         let base = mesh.vertices.len() as u32;
         let n = floats.len() / 3;
         mesh.vertices.extend(floats.chunks(3).map(|c| [c[0] * unit, c[1] * unit, c[2] * unit]));
@@ -215,6 +239,6 @@ pub fn read(path: &Path, bytes: &[u8]) -> Result<TriangleMesh, MeshError> {
                 }
             }
         }
+        Ok(())
     }
-    Ok(mesh)
 }

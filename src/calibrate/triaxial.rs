@@ -571,24 +571,7 @@ fn run_scene<T: Real>(
     let run_err = |e: String| CommandError::Run(format!("{}: {e}", scene.path.display()));
     let mut sim = Simulation::<T>::new(scene).map_err(|e| run_err(e.to_string()))?;
     let (d0, t) = (s.spacing, s.plate());
-    // Free slip on every plate: the normal of each marker is its plate's inward normal.
-    {
-        let bodies = &sim.system.interface.bodies;
-        if bodies.len() != 6 {
-            return Err(run_err(format!("the test needs its six plates as FSI bodies, found {}", bodies.len())));
-        }
-        let markers = bodies.last().map_or(0, |b| b.markers.end);
-        let mut normals = vec![[0.0; 3]; markers];
-        for (b, (_, axis, sign)) in bodies.iter().zip(PLATES) {
-            for k in b.markers.clone() {
-                normals[k][axis] = -sign;
-            }
-        }
-        let mut contact = vec![WallContact::Rough];
-        contact.extend([WallContact::Smooth; 6]);
-        sim.system.fluid.set_wall_contact(&contact, &normals).map_err(|e| run_err(e.to_string()))?;
-        sim.system.fluid.record_marker_moments().map_err(|e| run_err(e.to_string()))?;
-    }
+    free_slip_plates(&mut sim).map_err(run_err)?;
     let f = &sim.system.fluid;
     let particles = f.len();
     let density = f.materials().first().map_or(1.0, |m| m.density.as_f64());
@@ -610,143 +593,15 @@ fn run_scene<T: Real>(
     // forces of each exchange's last step, and a record sample is the mean of its four.
     sim.system.exchange_interval = 0.25 * SAMPLE_INTERVAL;
     let window_time = tau;
-    // PI control: v = sign · L/(2 M τ) · (e + ∫e dt / T_i), e = σ − σ0. For a sample of
-    // constrained modulus M the error then obeys e'' + e'/τ + e/(τ T_i) = 0, critically
-    // damped at T_i = 4τ; the integral supplies the steady plate speed that a sample flowing
-    // at a constant rate needs, so the lateral stress holds σ0 through the shear instead of
-    // lagging by the proportional offset.
-    let t_i = 4.0 * tau;
-    let mut integral = [0.0f64; 6];
-    let mut servo = |sim: &mut Simulation<T>, stresses: &[f64; 6], size: [f64; 3], dt: f64, axial: Option<f64>| {
-        let bodies: Vec<_> = sim.bodies().collect();
-        for (k, b) in bodies.into_iter().enumerate() {
-            let (_, axis, sign) = PLATES[k];
-            let v = match axial {
-                Some(v) if axis == 2 => -sign * v,
-                _ => {
-                    let e = stresses[k] - sigma0;
-                    integral[k] += e * dt;
-                    sign * (e + integral[k] / t_i) * size[axis] / (2.0 * modulus * tau)
-                }
-            };
-            let mut lin = [0.0; 3];
-            lin[axis] = v;
-            sim.set_body_velocity(b, lin, [0.0; 3]);
-        }
-    };
-    let exchange = |sim: &mut Simulation<T>| -> Result<Reading, CommandError> {
-        let t0 = sim.time();
-        sim.step_max(None).map_err(|e| run_err(e.to_string()))?;
-        let sf = surfaces(sim, t);
-        let size = size_of(sf);
-        Ok(Reading {
-            size,
-            faces: face_stresses(sim, sf, size, d0),
-            dt: sim.time() - t0,
-            soil: mean_stresses(sim, sf, size, d0),
-        })
-    };
-    // Consolidation.
-    let max_time = 40.0 * tau;
-    let mut history: Vec<(f64, [f64; 6])> = Vec::new();
-    let consolidated = loop {
-        let Reading { size, faces: st, dt, .. } = exchange(&mut sim)?;
-        history.push((sim.time(), st));
-        let now = sim.time();
-        let first = history.partition_point(|(time, _)| *time < now - window_time);
-        let tail = &history[first..];
-        let mean: [f64; 6] = std::array::from_fn(|k| tail.iter().map(|r| r.1[k]).sum::<f64>() / tail.len() as f64);
-        if now > 2.0 * tau && mean.iter().all(|m| (m - sigma0).abs() <= s.tolerance * sigma0) {
-            break mean;
-        }
-        if now > max_time {
-            let mean: Vec<String> = mean.iter().map(|m| format!("{m:.4e}")).collect();
-            return Err(run_err(format!(
-                "consolidation to {sigma0} Pa did not settle within {:.0} % in {:.3} s (40 servo time constants): face stresses {} Pa",
-                100.0 * s.tolerance,
-                max_time,
-                mean.join(", ")
-            )));
-        }
-        servo(&mut sim, &st, size, dt, None);
-    };
-    drop(history);
+    let mut servo = Servo { sigma0, modulus, tau, t_i: 4.0 * tau, integral: [0.0; 6] };
+    let probe = Probe { t, d0, run_err: &run_err };
+    let consolidated = consolidate(&mut sim, &mut servo, &probe, s.tolerance, window_time)?;
     let consolidation_time = sim.time();
     let size_c = size_of(surfaces(&sim, t));
-    let volume_c = size_c[0] * size_c[1] * size_c[2];
     // Shear.
-    let v_axial = 0.5 * s.strain_rate * size_c[2];
-    let mut series = Vec::new();
-    let (mut size, mut st, mut dt) = (size_c, [sigma0; 6], 0.0);
-    let (mut acc, mut acc_mean, mut n_acc, mut next) = ([0.0f64; 6], [0.0f64; 3], 0usize, sim.time() + SAMPLE_INTERVAL);
-    loop {
-        servo(&mut sim, &st, size, dt, Some(v_axial));
-        let soil;
-        Reading { size, faces: st, dt, soil } = exchange(&mut sim)?;
-        for k in 0..6 {
-            acc[k] += st[k];
-        }
-        for k in 0..3 {
-            acc_mean[k] += soil[k];
-        }
-        n_acc += 1;
-        if sim.time() < next - 1e-12 {
-            continue;
-        }
-        next += SAMPLE_INTERVAL;
-        let m = acc.map(|a| a / n_acc as f64);
-        let mean = acc_mean.map(|a| a / n_acc as f64);
-        (acc, acc_mean, n_acc) = ([0.0; 6], [0.0; 3], 0);
-        let axial_strain = 1.0 - size[2] / size_c[2];
-        let bulk = bulk_stresses(&sim);
-        series.push(Sample {
-            time: sim.time(),
-            axial_strain,
-            volumetric_strain: 1.0 - size[0] * size[1] * size[2] / volume_c,
-            vertical: mean[2],
-            lateral: 0.5 * (mean[0] + mean[1]),
-            face_vertical: 0.5 * (m[4] + m[5]),
-            face_lateral: 0.25 * (m[0] + m[1] + m[2] + m[3]),
-            bulk_vertical: bulk[0],
-            bulk_lateral: bulk[1],
-        });
-        if axial_strain >= s.max_strain {
-            break;
-        }
-    }
-    // Failure.
-    let de = s.strain_rate * SAMPLE_INTERVAL;
-    let cutoff = 2.0 * de / s.filter_wavelength;
-    let filter = LowPass::new(s.filter, s.filter_order, cutoff).map_err(|e| {
-        CommandError::Input(InputError::flag(
-            "--strain-rate",
-            format!(
-                "{e}: {} /s over a sample interval of {SAMPLE_INTERVAL} s is {de:.2e} strain per sample, too coarse for --filter-wavelength {}",
-                s.strain_rate, s.filter_wavelength
-            ),
-        ))
-    })?;
-    let half = ((s.filter_wavelength / de).round() as usize).max(1);
-    let floor = s.min_ratio * sigma0;
-    let pick = |vertical: &dyn Fn(&Sample) -> f64, lateral: &dyn Fn(&Sample) -> f64| {
-        let fv = filter.filtfilt(&series.iter().map(vertical).collect::<Vec<_>>());
-        let fh = filter.filtfilt(&series.iter().map(lateral).collect::<Vec<_>>());
-        let peak = match s.failure {
-            FailureRule::Peak => first_peak(&fv, half, floor),
-            FailureRule::Plateau => None,
-        };
-        let found = match peak {
-            Some(i) => Some((Failure { kind: FailureKind::Peak, index: i, value: fv[i] }, fh[i])),
-            None => plateau(&fv, PLATEAU_FRACTION).map(|(i, v)| {
-                let h = fh[i..].iter().sum::<f64>() / (fh.len() - i) as f64;
-                (Failure { kind: FailureKind::Plateau, index: i, value: v }, h)
-            }),
-        };
-        found.map(|f| (f, fv, fh)).ok_or_else(|| run_err("the shear phase recorded no sample".into()))
-    };
-    let ((failure, h_f), fv, fh) = pick(&|r| r.vertical, &|r| r.lateral)?;
-    let ((bulk_failure, bulk_h), _, _) = pick(&|r| r.bulk_vertical, &|r| r.bulk_lateral)?;
-    let ((face_failure, face_h), _, _) = pick(&|r| r.face_vertical, &|r| r.face_lateral)?;
+    let series = shear(&mut sim, &mut servo, &probe, size_c, 0.5 * s.strain_rate * size_c[2], s.max_strain)?;
+    let Picks { failure, h_f, fv, fh, bulk_failure, bulk_h, face_failure, face_h } =
+        pick_failures(&series, s, sigma0, &run_err)?;
     let (strain_f, v_f) = (series[failure.index].axial_strain, failure.value);
     // Particles that left the sample (through a gap between plates).
     let sf = surfaces(&sim, t);
@@ -792,6 +647,235 @@ fn run_scene<T: Real>(
         filtered: fv.into_iter().zip(fh).collect(),
         series,
     })
+}
+
+/// Free slip on every plate: the normal of each marker is its plate's inward normal. The
+/// markers' pair moments are recorded (the soil's mean stresses need them).
+fn free_slip_plates<T: Real>(sim: &mut Simulation<T>) -> Result<(), String> {
+    let bodies = &sim.system.interface.bodies;
+    if bodies.len() != 6 {
+        return Err(format!("the test needs its six plates as FSI bodies, found {}", bodies.len()));
+    }
+    let markers = bodies.last().map_or(0, |b| b.markers.end);
+    let mut normals = vec![[0.0; 3]; markers];
+    for (b, (_, axis, sign)) in bodies.iter().zip(PLATES) {
+        for k in b.markers.clone() {
+            normals[k][axis] = -sign;
+        }
+    }
+    let mut contact = vec![WallContact::Rough];
+    contact.extend([WallContact::Smooth; 6]);
+    sim.system.fluid.set_wall_contact(&contact, &normals).map_err(|e| e.to_string())?;
+    sim.system.fluid.record_marker_moments().map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// The plates' servo. PI control: v = sign · L/(2 M τ) · (e + ∫e dt / T_i), e = σ − σ0. For a
+/// sample of constrained modulus M the error then obeys e'' + e'/τ + e/(τ T_i) = 0, critically
+/// damped at T_i = 4τ; the integral supplies the steady plate speed that a sample flowing at a
+/// constant rate needs, so the lateral stress holds σ0 through the shear instead of lagging by
+/// the proportional offset.
+struct Servo {
+    sigma0: f64,
+    modulus: f64,
+    tau: f64,
+    t_i: f64,
+    integral: [f64; 6],
+}
+
+impl Servo {
+    /// Sets each plate's velocity from its face stress; with `axial`, the two z plates close
+    /// at that speed instead.
+    fn steer<T: Real>(
+        &mut self,
+        sim: &mut Simulation<T>,
+        stresses: &[f64; 6],
+        size: [f64; 3],
+        dt: f64,
+        axial: Option<f64>,
+    ) {
+        let bodies: Vec<_> = sim.bodies().collect();
+        for (k, b) in bodies.into_iter().enumerate() {
+            let (_, axis, sign) = PLATES[k];
+            let v = match axial {
+                Some(v) if axis == 2 => -sign * v,
+                _ => {
+                    let e = stresses[k] - self.sigma0;
+                    self.integral[k] += e * dt;
+                    sign * (e + self.integral[k] / self.t_i) * size[axis] / (2.0 * self.modulus * self.tau)
+                }
+            };
+            let mut lin = [0.0; 3];
+            lin[axis] = v;
+            sim.set_body_velocity(b, lin, [0.0; 3]);
+        }
+    }
+}
+
+/// How an exchange is read: the plates' thickness, the spacing and the run's error.
+struct Probe<'a> {
+    t: f64,
+    d0: f64,
+    run_err: &'a dyn Fn(String) -> CommandError,
+}
+
+impl Probe<'_> {
+    /// One exchange and what it reads.
+    fn exchange<T: Real>(&self, sim: &mut Simulation<T>) -> Result<Reading, CommandError> {
+        let t0 = sim.time();
+        sim.step_max(None).map_err(|e| (self.run_err)(e.to_string()))?;
+        let sf = surfaces(sim, self.t);
+        let size = sf.map(|[lo, hi]| hi - lo - self.d0);
+        Ok(Reading {
+            size,
+            faces: face_stresses(sim, sf, size, self.d0),
+            dt: sim.time() - t0,
+            soil: mean_stresses(sim, sf, size, self.d0),
+        })
+    }
+}
+
+/// Consolidation: the servo holds every face at σ0 until the faces' mean over the last
+/// `window_time` is within `tolerance` of it (after two time constants at least); the mean
+/// face stresses then.
+fn consolidate<T: Real>(
+    sim: &mut Simulation<T>,
+    servo: &mut Servo,
+    probe: &Probe,
+    tolerance: f64,
+    window_time: f64,
+) -> Result<[f64; 6], CommandError> {
+    let (sigma0, tau) = (servo.sigma0, servo.tau);
+    let max_time = 40.0 * tau;
+    let mut history: Vec<(f64, [f64; 6])> = Vec::new();
+    Ok(loop {
+        let Reading { size, faces: st, dt, .. } = probe.exchange(sim)?;
+        history.push((sim.time(), st));
+        let now = sim.time();
+        let first = history.partition_point(|(time, _)| *time < now - window_time);
+        let tail = &history[first..];
+        let mean: [f64; 6] = std::array::from_fn(|k| tail.iter().map(|r| r.1[k]).sum::<f64>() / tail.len() as f64);
+        if now > 2.0 * tau && mean.iter().all(|m| (m - sigma0).abs() <= tolerance * sigma0) {
+            break mean;
+        }
+        if now > max_time {
+            let mean: Vec<String> = mean.iter().map(|m| format!("{m:.4e}")).collect();
+            return Err((probe.run_err)(format!(
+                "consolidation to {sigma0} Pa did not settle within {:.0} % in {:.3} s (40 servo time constants): face stresses {} Pa",
+                100.0 * tolerance,
+                max_time,
+                mean.join(", ")
+            )));
+        }
+        servo.steer(sim, &st, size, dt, None);
+    })
+}
+
+/// The shear: the z plates close at `v_axial` while the servo holds the sides at σ0, one
+/// sample (the mean of its exchanges) per [`SAMPLE_INTERVAL`] until the axial strain reaches
+/// `max_strain`.
+fn shear<T: Real>(
+    sim: &mut Simulation<T>,
+    servo: &mut Servo,
+    probe: &Probe,
+    size_c: [f64; 3],
+    v_axial: f64,
+    max_strain: f64,
+) -> Result<Vec<Sample>, CommandError> {
+    let volume_c = size_c[0] * size_c[1] * size_c[2];
+    let mut series = Vec::new();
+    let (mut size, mut st, mut dt) = (size_c, [servo.sigma0; 6], 0.0);
+    let (mut acc, mut acc_mean, mut n_acc, mut next) = ([0.0f64; 6], [0.0f64; 3], 0usize, sim.time() + SAMPLE_INTERVAL);
+    loop {
+        servo.steer(sim, &st, size, dt, Some(v_axial));
+        let soil;
+        Reading { size, faces: st, dt, soil } = probe.exchange(sim)?;
+        for k in 0..6 {
+            acc[k] += st[k];
+        }
+        for k in 0..3 {
+            acc_mean[k] += soil[k];
+        }
+        n_acc += 1;
+        if sim.time() < next - 1e-12 {
+            continue;
+        }
+        next += SAMPLE_INTERVAL;
+        let m = acc.map(|a| a / n_acc as f64);
+        let mean = acc_mean.map(|a| a / n_acc as f64);
+        (acc, acc_mean, n_acc) = ([0.0; 6], [0.0; 3], 0);
+        let axial_strain = 1.0 - size[2] / size_c[2];
+        let bulk = bulk_stresses(sim);
+        series.push(Sample {
+            time: sim.time(),
+            axial_strain,
+            volumetric_strain: 1.0 - size[0] * size[1] * size[2] / volume_c,
+            vertical: mean[2],
+            lateral: 0.5 * (mean[0] + mean[1]),
+            face_vertical: 0.5 * (m[4] + m[5]),
+            face_lateral: 0.25 * (m[0] + m[1] + m[2] + m[3]),
+            bulk_vertical: bulk[0],
+            bulk_lateral: bulk[1],
+        });
+        if axial_strain >= max_strain {
+            break;
+        }
+    }
+    Ok(series)
+}
+
+/// The failure points of the three readings (soil, bulk, faces) and the filtered soil series.
+struct Picks {
+    failure: Failure,
+    h_f: f64,
+    fv: Vec<f64>,
+    fh: Vec<f64>,
+    bulk_failure: Failure,
+    bulk_h: f64,
+    face_failure: Failure,
+    face_h: f64,
+}
+
+/// Failure on the filtered series: the first peak (with `FailureRule::Peak`) or the plateau.
+fn pick_failures(
+    series: &[Sample],
+    s: &TriaxialSettings,
+    sigma0: f64,
+    run_err: &dyn Fn(String) -> CommandError,
+) -> Result<Picks, CommandError> {
+    let de = s.strain_rate * SAMPLE_INTERVAL;
+    let cutoff = 2.0 * de / s.filter_wavelength;
+    let filter = LowPass::new(s.filter, s.filter_order, cutoff).map_err(|e| {
+        CommandError::Input(InputError::flag(
+            "--strain-rate",
+            format!(
+                "{e}: {} /s over a sample interval of {SAMPLE_INTERVAL} s is {de:.2e} strain per sample, too coarse for --filter-wavelength {}",
+                s.strain_rate, s.filter_wavelength
+            ),
+        ))
+    })?;
+    let half = ((s.filter_wavelength / de).round() as usize).max(1);
+    let floor = s.min_ratio * sigma0;
+    let pick = |vertical: &dyn Fn(&Sample) -> f64, lateral: &dyn Fn(&Sample) -> f64| {
+        let fv = filter.filtfilt(&series.iter().map(vertical).collect::<Vec<_>>());
+        let fh = filter.filtfilt(&series.iter().map(lateral).collect::<Vec<_>>());
+        let peak = match s.failure {
+            FailureRule::Peak => first_peak(&fv, half, floor),
+            FailureRule::Plateau => None,
+        };
+        let found = match peak {
+            Some(i) => Some((Failure { kind: FailureKind::Peak, index: i, value: fv[i] }, fh[i])),
+            None => plateau(&fv, PLATEAU_FRACTION).map(|(i, v)| {
+                let h = fh[i..].iter().sum::<f64>() / (fh.len() - i) as f64;
+                (Failure { kind: FailureKind::Plateau, index: i, value: v }, h)
+            }),
+        };
+        found.map(|f| (f, fv, fh)).ok_or_else(|| run_err("the shear phase recorded no sample".into()))
+    };
+    let ((failure, h_f), fv, fh) = pick(&|r| r.vertical, &|r| r.lateral)?;
+    let ((bulk_failure, bulk_h), _, _) = pick(&|r| r.bulk_vertical, &|r| r.bulk_lateral)?;
+    let ((face_failure, face_h), _, _) = pick(&|r| r.face_vertical, &|r| r.face_lateral)?;
+    Ok(Picks { failure, h_f, fv, fh, bulk_failure, bulk_h, face_failure, face_h })
 }
 
 /// What `regolith calibrate triaxial` reads.

@@ -29,6 +29,45 @@ pub(super) fn resolve_settings(
     }
     // Defaults are the library's: what a scene does not set, SolverConfig::default() decides.
     let d = SolverConfig::default();
+    let time_step = resolve_time_step(sim, end_time, &d, e)?;
+    let integrator = resolve_integrator(sim, &d, e)?;
+    let gravity = sim.gravity.unwrap_or(d.gravity);
+    if gravity.iter().any(|g| !g.is_finite()) {
+        return Err(e("simulation.gravity", format!("must be three finite numbers in m/s² (got {gravity:?})")));
+    }
+    if gravity[2] > 0.0 {
+        return Err(e(
+            "simulation.gravity",
+            format!("must not point up (z ≤ 0; soil is layered along −z, tilt g for a slope) (got {gravity:?})"),
+        ));
+    }
+    let (backend, precision) = resolve_backend(sim, e)?;
+    let precision_set = sim.precision.is_some();
+
+    let sph = sph.ok_or_else(|| e("sph", "section [sph] is required (at least spacing)".into()))?;
+    let solver = SolverConfig { integrator, time_step, gravity, ..resolve_sph(sph, backend, &d, e)? };
+    let exchange_interval = sim.exchange_interval.unwrap_or(1e-3);
+    if !(exchange_interval.is_finite() && exchange_interval > 0.0 && exchange_interval <= end_time) {
+        return Err(e(
+            "simulation.exchange_interval",
+            format!("must be in (0, end_time = {end_time}] s (got {exchange_interval})"),
+        ));
+    }
+    let active = resolve_active(sph.active.as_ref(), &solver, e)?;
+    let body_markers = match sph.body_markers {
+        None | Some(file::BodyMarkersName::Surface) => BodyMarkers::Surface,
+        Some(file::BodyMarkersName::Inset) => BodyMarkers::Inset,
+    };
+    Ok(Settings { end_time, backend, precision, precision_set, solver, exchange_interval, active, body_markers })
+}
+
+/// `simulation.dt`, `cfl` and `max_dt`: adaptive (the default, or `dt = "auto"`) or fixed.
+fn resolve_time_step(
+    sim: &file::SimulationFile,
+    end_time: f64,
+    d: &SolverConfig,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<TimeStep, InputError> {
     let TimeStep::Adaptive { cfl: default_cfl, max: default_max_dt } = d.time_step else {
         unreachable!("the default time step is adaptive")
     };
@@ -40,7 +79,7 @@ pub(super) fn resolve_settings(
     if !(max_dt.is_finite() && max_dt > 0.0) {
         return Err(e("simulation.max_dt", format!("must be > 0 s (got {max_dt})")));
     }
-    let time_step = match &sim.dt {
+    Ok(match &sim.dt {
         None => TimeStep::Adaptive { cfl, max: max_dt },
         Some(toml::Value::String(s)) if s == "auto" => TimeStep::Adaptive { cfl, max: max_dt },
         Some(v) => {
@@ -63,8 +102,16 @@ pub(super) fn resolve_settings(
                 }
             }
         }
-    };
-    let integrator = match sim.integrator {
+    })
+}
+
+/// `simulation.integrator`: RK2; forward Euler is refused.
+fn resolve_integrator(
+    sim: &file::SimulationFile,
+    d: &SolverConfig,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<Integrator, InputError> {
+    Ok(match sim.integrator {
         None => d.integrator,
         Some(IntegratorName::Rk2) => Integrator::Rk2,
         Some(IntegratorName::Euler) => {
@@ -77,23 +124,19 @@ pub(super) fn resolve_settings(
                 "\"euler\" is unstable for soil at rest (a geostatic bed blows apart); use \"rk2\"".into(),
             ));
         }
-    };
-    let gravity = sim.gravity.unwrap_or(d.gravity);
-    if gravity.iter().any(|g| !g.is_finite()) {
-        return Err(e("simulation.gravity", format!("must be three finite numbers in m/s² (got {gravity:?})")));
-    }
-    if gravity[2] > 0.0 {
-        return Err(e(
-            "simulation.gravity",
-            format!("must not point up (z ≤ 0; soil is layered along −z, tilt g for a slope) (got {gravity:?})"),
-        ));
-    }
+    })
+}
+
+/// `simulation.backend` and `precision` (f64 on the CPU unless set; wgpu runs in f32 only).
+fn resolve_backend(
+    sim: &file::SimulationFile,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<(Backend, Precision), InputError> {
     let backend = match sim.backend.unwrap_or(BackendName::Cpu) {
         BackendName::Auto => Backend::Auto,
         BackendName::Cpu => Backend::Cpu,
         BackendName::Wgpu => Backend::Wgpu,
     };
-    let precision_set = sim.precision.is_some();
     if backend == Backend::Wgpu && matches!(sim.precision, Some(PrecisionName::F64)) {
         return Err(e("simulation.precision", "the wgpu backend runs in f32: use \"f32\" or backend \"cpu\"".into()));
     }
@@ -102,8 +145,16 @@ pub(super) fn resolve_settings(
             PrecisionName::F32 => Precision::F32,
             PrecisionName::F64 => Precision::F64,
         };
+    Ok((backend, precision))
+}
 
-    let sph = sph.ok_or_else(|| e("sph", "section [sph] is required (at least spacing)".into()))?;
+/// `[sph]`: the solver's SPH settings (the time step, integrator and gravity are the caller's).
+fn resolve_sph(
+    sph: &file::SphFile,
+    backend: Backend,
+    d: &SolverConfig,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<SolverConfig, InputError> {
     let spacing =
         sph.spacing.ok_or_else(|| e("sph.spacing", "is required: initial particle spacing in m, > 0".into()))?;
     if !(spacing.is_finite() && spacing > 0.0) {
@@ -117,6 +168,63 @@ pub(super) fn resolve_settings(
     if !(alpha.is_finite() && (0.0..=5.0).contains(&alpha)) {
         return Err(e("sph.artificial_viscosity", format!("must be in [0, 5] (got {alpha})")));
     }
+    let (shifting, xsph_epsilon, shifting_coefficient) = resolve_shifting(sph, d, e)?;
+    let (free_surface_threshold, free_surface_stress) = resolve_free_surface(sph, shifting, d, e)?;
+    let bce_layers = sph.bce_layers.unwrap_or(d.bce_layers as i64);
+    if !(1..=8).contains(&bce_layers) {
+        return Err(e("sph.bce_layers", format!("must be an integer in 1..=8 (got {bce_layers})")));
+    }
+    let kernel = match sph.kernel {
+        None => d.kernel,
+        Some(KernelName::Wendland) => KernelKind::Wendland,
+        Some(KernelName::Cubic) => KernelKind::Cubic,
+    };
+    // The wgpu backend rebuilds its lists every step: its default skin is 0.
+    let default_skin = if backend == Backend::Wgpu { 0.0 } else { d.neighbor_skin };
+    let neighbor_skin = sph.neighbor_skin.unwrap_or(default_skin);
+    let max_skin = regolith_fsi::config::MAX_NEIGHBOR_SKIN;
+    if !(neighbor_skin.is_finite() && (0.0..=max_skin).contains(&neighbor_skin)) {
+        return Err(e(
+            "sph.neighbor_skin",
+            format!(
+                "must be in [0, {max_skin}] (a multiple of h; 0 rebuilds the lists every step; got {neighbor_skin})"
+            ),
+        ));
+    }
+    if backend == Backend::Wgpu && sph.neighbor_skin.is_some_and(|s| s > 0.0) {
+        return Err(e(
+            "sph.neighbor_skin",
+            "the wgpu backend rebuilds its neighbour lists every step: use 0 or backend \"cpu\"".into(),
+        ));
+    }
+    Ok(SolverConfig {
+        spacing,
+        h_factor,
+        kernel,
+        integrator: d.integrator,
+        time_step: d.time_step,
+        artificial_viscosity: alpha,
+        shifting,
+        xsph_epsilon,
+        shifting_coefficient,
+        free_surface_threshold,
+        free_surface_stress,
+        gravity: d.gravity,
+        bce_layers: bce_layers as usize,
+        neighbor_skin,
+        drag: match sph.drag {
+            None | Some(DragName::Svf) => Drag::Svf,
+            Some(DragName::Particle) => Drag::Particle,
+        },
+    })
+}
+
+/// `sph.shifting` with `xsph_epsilon` and `shifting_coefficient`, each only with its scheme.
+fn resolve_shifting(
+    sph: &file::SphFile,
+    d: &SolverConfig,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<(Shifting, f64, f64), InputError> {
     let shifting = match sph.shifting {
         None => d.shifting,
         Some(ShiftingName::None) => Shifting::None,
@@ -138,6 +246,17 @@ pub(super) fn resolve_settings(
     if sph.shifting_coefficient.is_some() && !shifting.ppst() {
         return Err(e("sph.shifting_coefficient", "applies only when shifting includes \"ppst\"".into()));
     }
+    Ok((shifting, xsph_epsilon, shifting_coefficient))
+}
+
+/// `sph.free_surface`, `free_surface_threshold` and `free_surface_stress`; a flag that would
+/// change nothing is refused.
+fn resolve_free_surface(
+    sph: &file::SphFile,
+    shifting: Shifting,
+    d: &SolverConfig,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<(Option<f64>, FreeSurfaceStress), InputError> {
     let free_surface = sph.free_surface.unwrap_or(d.free_surface_threshold.is_some());
     let threshold = sph
         .free_surface_threshold
@@ -178,66 +297,7 @@ pub(super) fn resolve_settings(
             }
         }
     }
-    let bce_layers = sph.bce_layers.unwrap_or(d.bce_layers as i64);
-    if !(1..=8).contains(&bce_layers) {
-        return Err(e("sph.bce_layers", format!("must be an integer in 1..=8 (got {bce_layers})")));
-    }
-    let kernel = match sph.kernel {
-        None => d.kernel,
-        Some(KernelName::Wendland) => KernelKind::Wendland,
-        Some(KernelName::Cubic) => KernelKind::Cubic,
-    };
-    // The wgpu backend rebuilds its lists every step: its default skin is 0.
-    let default_skin = if backend == Backend::Wgpu { 0.0 } else { d.neighbor_skin };
-    let neighbor_skin = sph.neighbor_skin.unwrap_or(default_skin);
-    let max_skin = regolith_fsi::config::MAX_NEIGHBOR_SKIN;
-    if !(neighbor_skin.is_finite() && (0.0..=max_skin).contains(&neighbor_skin)) {
-        return Err(e(
-            "sph.neighbor_skin",
-            format!(
-                "must be in [0, {max_skin}] (a multiple of h; 0 rebuilds the lists every step; got {neighbor_skin})"
-            ),
-        ));
-    }
-    if backend == Backend::Wgpu && sph.neighbor_skin.is_some_and(|s| s > 0.0) {
-        return Err(e(
-            "sph.neighbor_skin",
-            "the wgpu backend rebuilds its neighbour lists every step: use 0 or backend \"cpu\"".into(),
-        ));
-    }
-    let solver = SolverConfig {
-        spacing,
-        h_factor,
-        kernel,
-        integrator,
-        time_step,
-        artificial_viscosity: alpha,
-        shifting,
-        xsph_epsilon,
-        shifting_coefficient,
-        free_surface_threshold: free_surface.then_some(threshold),
-        free_surface_stress,
-        gravity,
-        bce_layers: bce_layers as usize,
-        neighbor_skin,
-        drag: match sph.drag {
-            None | Some(DragName::Svf) => Drag::Svf,
-            Some(DragName::Particle) => Drag::Particle,
-        },
-    };
-    let exchange_interval = sim.exchange_interval.unwrap_or(1e-3);
-    if !(exchange_interval.is_finite() && exchange_interval > 0.0 && exchange_interval <= end_time) {
-        return Err(e(
-            "simulation.exchange_interval",
-            format!("must be in (0, end_time = {end_time}] s (got {exchange_interval})"),
-        ));
-    }
-    let active = resolve_active(sph.active.as_ref(), &solver, e)?;
-    let body_markers = match sph.body_markers {
-        None | Some(file::BodyMarkersName::Surface) => BodyMarkers::Surface,
-        Some(file::BodyMarkersName::Inset) => BodyMarkers::Inset,
-    };
-    Ok(Settings { end_time, backend, precision, precision_set, solver, exchange_interval, active, body_markers })
+    Ok((free_surface.then_some(threshold), free_surface_stress))
 }
 
 /// `[sph.active]`. Every key but `enabled` needs `enabled = true`, so that a setting is never

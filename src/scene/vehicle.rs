@@ -257,86 +257,13 @@ pub(crate) fn resolve_vehicle(
             Some(Grousers { count: g.count, height: g.height, thickness: g.thickness })
         }
     };
-    let names: Vec<&str> =
-        model.links.iter().map(|l| l.name.as_str()).chain(model.frames.iter().map(|f| f.name.as_str())).collect();
-    let wheel_links = model.wheel_links();
-    let fsi: Vec<usize> = match &v.fsi_links {
-        None => wheel_links.clone(),
-        Some(list) => list
-            .iter()
-            .map(|n| {
-                // A link lumped into its parent by a fixed joint selects that parent.
-                let (l, _) = model.locate(n).ok_or_else(|| {
-                    e("fsi_links", format!("no link `{n}` in {}; links: {names:?}", urdf_path.display()))
-                })?;
-                if model.links[l].collision.is_empty() {
-                    return Err(e("fsi_links", format!("link `{n}` has no collision geometry to make markers from")));
-                }
-                Ok(l)
-            })
-            .collect::<Result<_, _>>()?,
-    };
+    let fsi = fsi_links(&model, v.fsi_links.as_deref(), &urdf_path, &e)?;
     let base = Pose::from_rpy_deg([xy[0], xy[1], z.unwrap_or(0.0)], orientation);
-    let poses = model.link_poses(&base);
-    let base_inv_rot = [-base.rotation[0], -base.rotation[1], -base.rotation[2], base.rotation[3]];
-    let mut wheels = Vec::new();
     let first_body = bodies.len();
-    for (li, link) in model.links.iter().enumerate() {
-        let joint = model.joints.iter().position(|j| j.child == li);
-        let is_wheel = wheel_links.contains(&li);
-        let mut shape = combine(&link.collision);
-        if is_wheel && let Some(ji) = joint {
-            let j = &model.joints[ji];
-            // The axle in the link frame is the joint axis (the joint frame is the link frame).
-            if let Some((s, radius)) = wheel_shape(link, j.axis, grousers) {
-                let axle_root = regolith_rigid::quat_rotate(base_inv_rot, poses[li].rotate(j.axis));
-                let centre_root = regolith_rigid::quat_rotate(
-                    base_inv_rot,
-                    [0, 1, 2].map(|k| poses[li].translation[k] - base.translation[k]),
-                );
-                wheels.push(WheelSpec {
-                    link: li,
-                    joint: ji,
-                    forward_sign: if axle_root[1] >= 0.0 { 1.0 } else { -1.0 },
-                    radius,
-                    side: if centre_root[1] >= 0.0 { 1.0 } else { -1.0 },
-                });
-                if fsi.contains(&li) {
-                    shape = Some(s);
-                }
-            }
-        }
-        bodies.push(BodySpec {
-            desc: BodyDesc {
-                name: format!("{name}/{}", link.name),
-                shape: shape.unwrap_or(ShapeDesc::Compound(Vec::new())),
-                mass: MassSpec::Inertial { mass: link.mass, com: link.com, inertia: link.inertia },
-                pose: poses[li],
-                motion: Motion::Free,
-                friction,
-                collides: !link.collision.is_empty(),
-            },
-            fsi: fsi.contains(&li),
-            bce_layers: layers as usize,
-            key: format!("{key} link `{}`", link.name),
-            visual: combine(&link.visual),
-            initial_velocity: None,
-            active_margin: None,
-            contact: WallContact::Rough,
-            permeable: false,
-        });
-    }
+    let links = Links { name: &name, key: &key, fsi: &fsi, grousers, friction, layers: layers as usize };
+    let wheels = link_bodies(&model, &base, &links, bodies);
     for b in &bodies[first_body..] {
-        if b.fsi
-            && let ShapeDesc::Compound(parts) = &b.desc.shape
-        {
-            for (_, s) in parts {
-                if let ShapeDesc::Mesh { vertices, indices } = s {
-                    regolith_coupling::check_watertight(vertices, indices)
-                        .map_err(|m| e("fsi_links", format!("{}: collision mesh {m}", b.desc.name)))?;
-                }
-            }
-        }
+        check_fsi_meshes(b, &e)?;
     }
     let joint_names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
     let find_joint = |k: &str, n: &str| {
@@ -351,64 +278,10 @@ pub(crate) fn resolve_vehicle(
             None => e(k, format!("no joint `{n}`; joints: {joint_names:?}")),
         })
     };
-    let mut drive = Vec::new();
-    let mut steering = Vec::new();
-    let mut max_torque = 0.0;
-    if let Some(d) = &v.drive {
-        let given = [d.wheel_speed.is_some(), d.left.is_some() || d.right.is_some(), d.joints.is_some()];
-        if given.iter().filter(|g| **g).count() > 1 {
-            return Err(e("drive", "give one of wheel_speed, left/right or joints".into()));
-        }
-        if d.left.is_some() != d.right.is_some() {
-            return Err(e("drive", "skid steering needs both left and right".into()));
-        }
-        let p = |k: &str, x: &ProfileFile, scale: f64| profile(x, scale).map_err(|m| e(&format!("drive.{k}"), m));
-        if let Some(s) = &d.wheel_speed {
-            let prof = p("wheel_speed", s, 1.0)?;
-            drive.extend(wheels.iter().map(|w| (w.joint, prof.clone())));
-        }
-        if let (Some(l), Some(r)) = (&d.left, &d.right) {
-            let (pl, pr) = (p("left", l, 1.0)?, p("right", r, 1.0)?);
-            drive.extend(wheels.iter().map(|w| (w.joint, if w.side > 0.0 { pl.clone() } else { pr.clone() })));
-        }
-        for (n, x) in d.joints.iter().flatten() {
-            let ji = find_joint("drive.joints", n)?;
-            if !wheels.iter().any(|w| w.joint == ji) {
-                return Err(e(
-                    "drive.joints",
-                    format!("joint `{n}` is not a wheel joint (continuous, with a cylinder or mesh wheel)"),
-                ));
-            }
-            drive.push((ji, p(&format!("joints.{n}"), x, 1.0)?));
-        }
-        for (n, x) in d.steering.iter().flatten() {
-            let ji = find_joint("drive.steering", n)?;
-            // Continuous joints steer too (a Sawppy's corner joints are continuous), but not wheels.
-            let steerable = match model.joints[ji].kind {
-                JointType::Revolute { .. } => true,
-                JointType::Continuous => !wheels.iter().any(|w| w.joint == ji),
-                _ => false,
-            };
-            if !steerable {
-                return Err(e(
-                    "drive.steering",
-                    format!("joint `{n}` is not a revolute (or continuous, non-wheel) joint"),
-                ));
-            }
-            steering.push((ji, p(&format!("steering.{n}"), x, std::f64::consts::PI / 180.0)?));
-        }
-        if drive.is_empty() && steering.is_empty() {
-            return Err(e("drive", "drives nothing: give wheel_speed, left and right, joints or steering".into()));
-        }
-        if !wheels.is_empty() && drive.is_empty() && d.wheel_speed.is_some() {
-            return Err(e("drive.wheel_speed", "the vehicle has no wheel joints".into()));
-        }
-        max_torque =
-            d.max_torque.ok_or_else(|| e("drive.max_torque", "is required: the motors' torque limit (N m)".into()))?;
-        if !(max_torque > 0.0 && max_torque.is_finite()) {
-            return Err(e("drive.max_torque", format!("must be > 0 N m (got {max_torque})")));
-        }
-    }
+    let Drives { drive, steering, max_torque } = match &v.drive {
+        None => Drives::default(),
+        Some(d) => resolve_drive(&model, d, &wheels, &find_joint, &e)?,
+    };
     if drive.is_empty() && v.drive.as_ref().is_some_and(|d| d.wheel_speed.is_some() || d.left.is_some()) {
         return Err(e(
             "drive",
@@ -452,6 +325,184 @@ pub(crate) fn resolve_vehicle(
         differential,
         self_collide: v.self_collide.unwrap_or(false),
     })
+}
+
+/// `fsi_links`: the links that get markers (default: the wheel links). A link lumped into its
+/// parent by a fixed joint selects that parent; each needs collision geometry.
+fn fsi_links(
+    model: &UrdfModel,
+    names_given: Option<&[String]>,
+    urdf_path: &Path,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<Vec<usize>, InputError> {
+    let names: Vec<&str> =
+        model.links.iter().map(|l| l.name.as_str()).chain(model.frames.iter().map(|f| f.name.as_str())).collect();
+    let Some(list) = names_given else { return Ok(model.wheel_links()) };
+    list.iter()
+        .map(|n| {
+            let (l, _) = model
+                .locate(n)
+                .ok_or_else(|| e("fsi_links", format!("no link `{n}` in {}; links: {names:?}", urdf_path.display())))?;
+            if model.links[l].collision.is_empty() {
+                return Err(e("fsi_links", format!("link `{n}` has no collision geometry to make markers from")));
+            }
+            Ok(l)
+        })
+        .collect()
+}
+
+/// What every link body of one vehicle shares.
+struct Links<'a> {
+    name: &'a str,
+    key: &'a str,
+    fsi: &'a [usize],
+    grousers: Option<Grousers>,
+    friction: f64,
+    layers: usize,
+}
+
+/// Appends one body per link, posed from the root at `base`, and returns the wheels: links
+/// on a continuous joint whose collision is a wheel (an FSI wheel takes that shape, grousers
+/// included).
+fn link_bodies(model: &UrdfModel, base: &Pose, l: &Links, bodies: &mut Vec<BodySpec>) -> Vec<WheelSpec> {
+    let wheel_links = model.wheel_links();
+    let poses = model.link_poses(base);
+    let base_inv_rot = [-base.rotation[0], -base.rotation[1], -base.rotation[2], base.rotation[3]];
+    let mut wheels = Vec::new();
+    for (li, link) in model.links.iter().enumerate() {
+        let joint = model.joints.iter().position(|j| j.child == li);
+        let is_wheel = wheel_links.contains(&li);
+        let mut shape = combine(&link.collision);
+        if is_wheel && let Some(ji) = joint {
+            let j = &model.joints[ji];
+            // The axle in the link frame is the joint axis (the joint frame is the link frame).
+            if let Some((s, radius)) = wheel_shape(link, j.axis, l.grousers) {
+                let axle_root = regolith_rigid::quat_rotate(base_inv_rot, poses[li].rotate(j.axis));
+                let centre_root = regolith_rigid::quat_rotate(
+                    base_inv_rot,
+                    [0, 1, 2].map(|k| poses[li].translation[k] - base.translation[k]),
+                );
+                wheels.push(WheelSpec {
+                    link: li,
+                    joint: ji,
+                    forward_sign: if axle_root[1] >= 0.0 { 1.0 } else { -1.0 },
+                    radius,
+                    side: if centre_root[1] >= 0.0 { 1.0 } else { -1.0 },
+                });
+                if l.fsi.contains(&li) {
+                    shape = Some(s);
+                }
+            }
+        }
+        bodies.push(BodySpec {
+            desc: BodyDesc {
+                name: format!("{}/{}", l.name, link.name),
+                shape: shape.unwrap_or(ShapeDesc::Compound(Vec::new())),
+                mass: MassSpec::Inertial { mass: link.mass, com: link.com, inertia: link.inertia },
+                pose: poses[li],
+                motion: Motion::Free,
+                friction: l.friction,
+                collides: !link.collision.is_empty(),
+            },
+            fsi: l.fsi.contains(&li),
+            bce_layers: l.layers,
+            key: format!("{} link `{}`", l.key, link.name),
+            visual: combine(&link.visual),
+            initial_velocity: None,
+            active_margin: None,
+            contact: WallContact::Rough,
+            permeable: false,
+        });
+    }
+    wheels
+}
+
+/// An FSI link's collision meshes must be closed: markers fill the inside.
+fn check_fsi_meshes(b: &BodySpec, e: &dyn Fn(&str, String) -> InputError) -> Result<(), InputError> {
+    if b.fsi
+        && let ShapeDesc::Compound(parts) = &b.desc.shape
+    {
+        for (_, s) in parts {
+            if let ShapeDesc::Mesh { vertices, indices } = s {
+                regolith_coupling::check_watertight(vertices, indices)
+                    .map_err(|m| e("fsi_links", format!("{}: collision mesh {m}", b.desc.name)))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The resolved `drive`: wheel and joint speed profiles, steering angle profiles, and the
+/// motors' torque limit.
+#[derive(Default)]
+struct Drives {
+    drive: Vec<(usize, Profile)>,
+    steering: Vec<(usize, Profile)>,
+    max_torque: f64,
+}
+
+/// `drive`: one of `wheel_speed`, `left`/`right` or `joints`, optional `steering`, and
+/// `max_torque`.
+fn resolve_drive(
+    model: &UrdfModel,
+    d: &DriveFile,
+    wheels: &[WheelSpec],
+    find_joint: &dyn Fn(&str, &str) -> Result<usize, InputError>,
+    e: &dyn Fn(&str, String) -> InputError,
+) -> Result<Drives, InputError> {
+    let mut drive = Vec::new();
+    let mut steering = Vec::new();
+    let given = [d.wheel_speed.is_some(), d.left.is_some() || d.right.is_some(), d.joints.is_some()];
+    if given.iter().filter(|g| **g).count() > 1 {
+        return Err(e("drive", "give one of wheel_speed, left/right or joints".into()));
+    }
+    if d.left.is_some() != d.right.is_some() {
+        return Err(e("drive", "skid steering needs both left and right".into()));
+    }
+    let p = |k: &str, x: &ProfileFile, scale: f64| profile(x, scale).map_err(|m| e(&format!("drive.{k}"), m));
+    if let Some(s) = &d.wheel_speed {
+        let prof = p("wheel_speed", s, 1.0)?;
+        drive.extend(wheels.iter().map(|w| (w.joint, prof.clone())));
+    }
+    if let (Some(l), Some(r)) = (&d.left, &d.right) {
+        let (pl, pr) = (p("left", l, 1.0)?, p("right", r, 1.0)?);
+        drive.extend(wheels.iter().map(|w| (w.joint, if w.side > 0.0 { pl.clone() } else { pr.clone() })));
+    }
+    for (n, x) in d.joints.iter().flatten() {
+        let ji = find_joint("drive.joints", n)?;
+        if !wheels.iter().any(|w| w.joint == ji) {
+            return Err(e(
+                "drive.joints",
+                format!("joint `{n}` is not a wheel joint (continuous, with a cylinder or mesh wheel)"),
+            ));
+        }
+        drive.push((ji, p(&format!("joints.{n}"), x, 1.0)?));
+    }
+    for (n, x) in d.steering.iter().flatten() {
+        let ji = find_joint("drive.steering", n)?;
+        // Continuous joints steer too (a Sawppy's corner joints are continuous), but not wheels.
+        let steerable = match model.joints[ji].kind {
+            JointType::Revolute { .. } => true,
+            JointType::Continuous => !wheels.iter().any(|w| w.joint == ji),
+            _ => false,
+        };
+        if !steerable {
+            return Err(e("drive.steering", format!("joint `{n}` is not a revolute (or continuous, non-wheel) joint")));
+        }
+        steering.push((ji, p(&format!("steering.{n}"), x, std::f64::consts::PI / 180.0)?));
+    }
+    if drive.is_empty() && steering.is_empty() {
+        return Err(e("drive", "drives nothing: give wheel_speed, left and right, joints or steering".into()));
+    }
+    if !wheels.is_empty() && drive.is_empty() && d.wheel_speed.is_some() {
+        return Err(e("drive.wheel_speed", "the vehicle has no wheel joints".into()));
+    }
+    let max_torque =
+        d.max_torque.ok_or_else(|| e("drive.max_torque", "is required: the motors' torque limit (N m)".into()))?;
+    if !(max_torque > 0.0 && max_torque.is_finite()) {
+        return Err(e("drive.max_torque", format!("must be > 0 N m (got {max_torque})")));
+    }
+    Ok(Drives { drive, steering, max_torque })
 }
 
 /// Resolves `differential`: two distinct revolute or continuous joints with the same parent

@@ -95,6 +95,9 @@ fn index_range(origin: f64, d0: f64, lo: f64, hi: f64) -> (i64, i64) {
 /// The soil region and the water region holding a lattice point, if any.
 type Occupants = (Option<usize>, Option<usize>);
 
+/// Occupied lattice points and the region (index into the regions) holding each.
+type Cells = HashMap<[i64; 3], usize>;
+
 /// Builds soil particles and wall markers.
 pub fn build_terrain(
     container: &Aabb,
@@ -133,7 +136,7 @@ pub fn build_terrain_in(
             container.max, snapped.max
         ));
     }
-    let [nx, ny, nz] = lat.n;
+    let nx = lat.n[0];
     let d0 = spacing;
     // The end-wall planes of the slice (the container's own without a window).
     let [xa, xb] = window.unwrap_or([0, nx]);
@@ -145,11 +148,39 @@ pub fn build_terrain_in(
     if let Some(spec) = regions.iter().find(|r| r.material as usize >= materials.len()) {
         return Err(TerrainError::Setup(format!("material index {} out of range", spec.material)));
     }
+    let (cells, water_cells) = occupied(&lat, regions, materials, [xa, xb])?;
+    if window.is_none() && cells.is_empty() && water_cells.is_empty() {
+        return Err(TerrainError::Setup(
+            "the soil regions contain no lattice point: make them larger than the spacing".into(),
+        ));
+    }
+    let particles = geostatic(cells, water_cells, &lat, regions, materials, gravity);
+    let l = bce_layers as i64;
+    let markers = wall_markers(&lat, [xa, xb], l);
+    let h_room = snapped.size()[2];
+    let pad = (l as f64 + 3.0) * d0;
+    let domain = (
+        [snapped.min[0] - pad, snapped.min[1] - pad, snapped.min[2] - pad],
+        [snapped.max[0] + pad, snapped.max[1] + pad, snapped.max[2] + h_room + pad],
+    );
+    Ok(TerrainBuild { particles, markers, container: snapped, domain, notes })
+}
+
+/// The occupied interior lattice points of the slice `xa < i < xb` and the region holding
+/// each, one map per phase (water shares space with soil); regions of one phase may not
+/// overlap.
+fn occupied(
+    lat: &Lattice,
+    regions: &[RegionSpec],
+    materials: &[Material<f64>],
+    [xa, xb]: [i64; 2],
+) -> Result<(Cells, Cells), TerrainError> {
+    let [_, ny, nz] = lat.n;
+    let d0 = lat.d0;
+    let snapped = lat.container();
     let is_water = |r: usize| materials[regions[r].material as usize].is_water();
-    // Occupied interior lattice points and the region holding each, one map per phase (water
-    // shares space with soil); regions of a phase may not overlap.
-    let mut cells: HashMap<[i64; 3], usize> = HashMap::new();
-    let mut water_cells: HashMap<[i64; 3], usize> = HashMap::new();
+    let mut cells = Cells::new();
+    let mut water_cells = Cells::new();
     let mut overlap = None;
     let mut insert = |c: [i64; 3], r: usize| {
         if c[0] > xa && c[0] < xb && c[1] >= 1 && c[1] < ny && c[2] >= 1 && c[2] < nz {
@@ -208,13 +239,21 @@ pub fn build_terrain_in(
     if let Some((first, second, c)) = overlap {
         return Err(TerrainError::Overlap { first, second, at: lat.point(c) });
     }
-    if window.is_none() && cells.is_empty() && water_cells.is_empty() {
-        return Err(TerrainError::Setup(
-            "the soil regions contain no lattice point: make them larger than the spacing".into(),
-        ));
-    }
-    // Geostatic stress, column by column from the top: each lattice point holds soil, water
-    // or both (a saturated cell).
+    Ok((cells, water_cells))
+}
+
+/// The soil and water particles of the occupied points, with the geostatic stress integrated
+/// column by column from the top: each lattice point holds soil, water or both (a saturated
+/// cell).
+fn geostatic(
+    cells: Cells,
+    water_cells: Cells,
+    lat: &Lattice,
+    regions: &[RegionSpec],
+    materials: &[Material<f64>],
+    gravity: [f64; 3],
+) -> Vec<ParticleInit> {
+    let d0 = lat.d0;
     let mut columns: BTreeMap<(i64, i64), BTreeMap<i64, Occupants>> = BTreeMap::new();
     for (c, r) in &cells {
         columns.entry((c[0], c[1])).or_default().entry(c[2]).or_default().0 = Some(*r);
@@ -279,7 +318,13 @@ pub fn build_terrain_in(
             }
         }
     }
-    let l = bce_layers as i64;
+    particles
+}
+
+/// The container's wall markers for the slice between the end-wall planes `i = xa` and
+/// `i = xb`: `l` layers behind the floor, the side walls and the end walls (no lid).
+fn wall_markers(lat: &Lattice, [xa, xb]: [i64; 2], l: i64) -> Vec<MarkerInit> {
+    let [_, ny, nz] = lat.n;
     let mut markers = Vec::new();
     for i in xa - (l - 1)..=(xb + l - 1) {
         for j in -(l - 1)..=(ny + l - 1) {
@@ -290,13 +335,7 @@ pub fn build_terrain_in(
             }
         }
     }
-    let h_room = snapped.size()[2];
-    let pad = (l as f64 + 3.0) * d0;
-    let domain = (
-        [snapped.min[0] - pad, snapped.min[1] - pad, snapped.min[2] - pad],
-        [snapped.max[0] + pad, snapped.max[1] + pad, snapped.max[2] + h_room + pad],
-    );
-    Ok(TerrainBuild { particles, markers, container: snapped, domain, notes })
+    markers
 }
 
 #[cfg(test)]

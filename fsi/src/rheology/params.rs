@@ -182,148 +182,18 @@ impl MaterialParams {
                 }
             }
             ModelKind::DruckerPrager => {
-                for (k, present) in mcc_keys {
-                    forbid(k, present, model, " (it is a Modified Cam Clay key; set model = \"mcc\")")?;
-                }
-                let phi = require("friction_angle", self.friction_angle, model)?;
-                let c = self.cohesion.unwrap_or(0.0);
-                if !(c.is_finite() && c >= 0.0) {
-                    return Err(err("cohesion", format!("must be ≥ 0 Pa (got {c})")));
-                }
-                if phi == 0.0 && c == 0.0 {
-                    return Err(err(
-                        "friction_angle",
-                        "and cohesion are both zero: the soil would have no strength; give φ > 0 or c > 0",
-                    ));
-                }
-                let mut dp = DruckerPrager::from_mohr_coulomb(T::of(phi), T::of(c));
-                let given = mu_i_keys.iter().filter(|(_, v)| v.is_some()).count();
-                if given > 0 {
-                    let missing = mu_i_keys.iter().copied().chain([("grain_density", self.grain_density)]);
-                    if let Some((k, _)) = missing.into_iter().find(|(_, v)| v.is_none()) {
-                        return Err(err(
-                            k,
-                            "is required when any μ(I) key is given (mu_i_friction_angle, mu_i_i0, grain_diameter, grain_density)",
-                        ));
-                    }
-                    let phi2 = self.mu_i_friction_angle.unwrap_or(phi);
-                    if !(phi2.is_finite() && phi2 >= phi && phi2 < 90.0) {
-                        return Err(err(
-                            "mu_i_friction_angle",
-                            format!("must be in [friction_angle = {phi}, 90) degrees (got {phi2})"),
-                        ));
-                    }
-                    let i0 = positive("mu_i_i0", self.mu_i_i0.unwrap_or(0.0), "")?;
-                    let d = positive("grain_diameter", self.grain_diameter.unwrap_or(0.0), " m")?;
-                    let rho_s = positive("grain_density", self.grain_density.unwrap_or(0.0), " kg/m³")?;
-                    dp = dp.with_mu_i(T::of(phi2), T::of(i0), T::of(d), T::of(rho_s));
-                }
+                let (phi, c, dp) = self.build_dp(model, mu_i_keys, mcc_keys)?;
                 material.friction_angle_deg = T::of(phi);
                 material.cohesion = T::of(c);
                 material.rheology = Rheology::DruckerPrager(dp);
             }
             ModelKind::Mcc => {
-                forbid("cohesion", self.cohesion.is_some(), model, " (Modified Cam Clay is cohesionless here)")?;
-                for (k, v) in mu_i_keys {
-                    forbid(k, v.is_some(), model, "")?;
-                }
-                let m = match (self.mcc_m, self.friction_angle) {
-                    (Some(_), Some(_)) => {
-                        return Err(err(
-                            "mcc_m",
-                            "and friction_angle are both given: give one (M = 6 sinφ / (3 − sinφ))",
-                        ));
-                    }
-                    (Some(m), None) => m,
-                    (None, Some(phi)) => {
-                        if phi <= 0.0 {
-                            return Err(err(
-                                "friction_angle",
-                                format!("must be > 0 degrees for model \"mcc\" (got {phi})"),
-                            ));
-                        }
-                        m_from_friction_angle(phi)
-                    }
-                    (None, None) => return Err(err("mcc_m", "is required for model \"mcc\" (or give friction_angle)")),
-                };
-                if !(m.is_finite() && m > 0.0 && m < 3.0) {
-                    return Err(err("mcc_m", format!("must satisfy 0 < M < 3 (got {m})")));
-                }
-                let kappa = match (self.mcc_kappa, self.mcc_cr) {
-                    (Some(_), Some(_)) => {
-                        return Err(err("mcc_kappa", "and mcc_cr are both given: give one (κ = Cr / ln 10)"));
-                    }
-                    (Some(k), None) => k,
-                    (None, Some(cr)) => kappa_from_cr(cr),
-                    (None, None) => return Err(err("mcc_kappa", "is required for model \"mcc\" (or give mcc_cr)")),
-                };
-                let lambda = match (self.mcc_lambda, self.mcc_cc) {
-                    (Some(_), Some(_)) => {
-                        return Err(err("mcc_lambda", "and mcc_cc are both given: give one (λ = Cc / ln 10)"));
-                    }
-                    (Some(l), None) => l,
-                    (None, Some(cc)) => lambda_from_cc(cc),
-                    (None, None) => return Err(err("mcc_lambda", "is required for model \"mcc\" (or give mcc_cc)")),
-                };
-                let kappa_key = if self.mcc_kappa.is_some() { "mcc_kappa" } else { "mcc_cr" };
-                let lambda_key = if self.mcc_lambda.is_some() { "mcc_lambda" } else { "mcc_cc" };
-                if !(kappa.is_finite() && kappa > 0.0) {
-                    return Err(err(kappa_key, format!("must be > 0 (got {kappa})")));
-                }
-                if !(lambda.is_finite() && lambda > 0.0) {
-                    return Err(err(lambda_key, format!("must be > 0 (got {lambda})")));
-                }
-                if lambda < kappa {
-                    return Err(err(
-                        lambda_key,
-                        format!(
-                            "λ = {lambda} is smaller than κ = {kappa}: they look swapped. κ ({kappa_key}) is the swelling slope, \
-                             λ ({lambda_key}) the steeper normal compression slope; MCC needs λ > κ"
-                        ),
-                    ));
-                }
-                if lambda == kappa {
-                    return Err(err(
-                        lambda_key,
-                        format!("must be greater than κ (both are {kappa}): the hardening law divides by λ − κ"),
-                    ));
-                }
-                let v_lambda = require("mcc_v_lambda", self.mcc_v_lambda, model)?;
-                if v_lambda <= 1.0 {
-                    return Err(err(
-                        "mcc_v_lambda",
-                        format!("must be > 1: it is a specific volume 1 + e (got {v_lambda})"),
-                    ));
-                }
-                let ocr = self.ocr.unwrap_or(1.0);
-                if !(ocr.is_finite() && ocr >= 1.0) {
-                    return Err(err(
-                        "ocr",
-                        format!("must be ≥ 1 (got {ocr}); OCR < 1 puts the start outside the yield surface"),
-                    ));
-                }
-                let floor = self.mcc_pc_floor.unwrap_or(100.0);
-                if !(floor.is_finite() && floor >= 0.0) {
-                    return Err(err("mcc_pc_floor", format!("must be ≥ 0 Pa (got {floor}); 0 turns the floor off")));
-                }
-                let clamp = self.mcc_clamp_moduli.unwrap_or(true);
-                let safeguards = MccSafeguards {
-                    moduli_clamp: if clamp { Some((T::of(0.1), T::one())) } else { None },
-                    pc_floor: T::of(floor),
-                };
+                let (m, ocr, mcc) = self.build_mcc(model, mu_i_keys, nu, elastic)?;
                 // sin φ from M (triaxial compression), used for K0 at rest.
                 let sin_phi = 3.0 * m / (6.0 + m);
                 material.friction_angle_deg = T::of(sin_phi.asin().to_degrees());
                 material.ocr = T::of(ocr);
-                material.rheology = Rheology::Mcc(ModifiedCamClay {
-                    m: T::of(m),
-                    kappa: T::of(kappa),
-                    lambda: T::of(lambda),
-                    v_lambda: T::of(v_lambda),
-                    poisson: T::of(nu),
-                    reference: elastic,
-                    safeguards,
-                });
+                material.rheology = Rheology::Mcc(mcc);
             }
         }
         if grain_density.is_some() && permeability.is_none() && self.mu_i_i0.is_none() {
@@ -333,6 +203,163 @@ impl MaterialParams {
             ));
         }
         Ok(material)
+    }
+
+    /// A Drucker–Prager material's φ (degrees), c (Pa) and yield surface, with μ(I) when its
+    /// keys are given (all of them, grain density included).
+    fn build_dp<T: Real>(
+        &self,
+        model: ModelKind,
+        mu_i_keys: [(&'static str, Option<f64>); 3],
+        mcc_keys: [(&'static str, bool); 9],
+    ) -> Result<(f64, f64, DruckerPrager<T>), ParamError> {
+        for (k, present) in mcc_keys {
+            forbid(k, present, model, " (it is a Modified Cam Clay key; set model = \"mcc\")")?;
+        }
+        let phi = require("friction_angle", self.friction_angle, model)?;
+        let c = self.cohesion.unwrap_or(0.0);
+        if !(c.is_finite() && c >= 0.0) {
+            return Err(err("cohesion", format!("must be ≥ 0 Pa (got {c})")));
+        }
+        if phi == 0.0 && c == 0.0 {
+            return Err(err(
+                "friction_angle",
+                "and cohesion are both zero: the soil would have no strength; give φ > 0 or c > 0",
+            ));
+        }
+        let mut dp = DruckerPrager::from_mohr_coulomb(T::of(phi), T::of(c));
+        let given = mu_i_keys.iter().filter(|(_, v)| v.is_some()).count();
+        if given > 0 {
+            let missing = mu_i_keys.iter().copied().chain([("grain_density", self.grain_density)]);
+            if let Some((k, _)) = missing.into_iter().find(|(_, v)| v.is_none()) {
+                return Err(err(
+                    k,
+                    "is required when any μ(I) key is given (mu_i_friction_angle, mu_i_i0, grain_diameter, grain_density)",
+                ));
+            }
+            let phi2 = self.mu_i_friction_angle.unwrap_or(phi);
+            if !(phi2.is_finite() && phi2 >= phi && phi2 < 90.0) {
+                return Err(err(
+                    "mu_i_friction_angle",
+                    format!("must be in [friction_angle = {phi}, 90) degrees (got {phi2})"),
+                ));
+            }
+            let i0 = positive("mu_i_i0", self.mu_i_i0.unwrap_or(0.0), "")?;
+            let d = positive("grain_diameter", self.grain_diameter.unwrap_or(0.0), " m")?;
+            let rho_s = positive("grain_density", self.grain_density.unwrap_or(0.0), " kg/m³")?;
+            dp = dp.with_mu_i(T::of(phi2), T::of(i0), T::of(d), T::of(rho_s));
+        }
+        Ok((phi, c, dp))
+    }
+
+    /// A Modified Cam Clay material's M, OCR and model: M or φ, κ or Cr, λ or Cc, v_λ and the
+    /// safeguards.
+    fn build_mcc<T: Real>(
+        &self,
+        model: ModelKind,
+        mu_i_keys: [(&'static str, Option<f64>); 3],
+        nu: f64,
+        elastic: Moduli<T>,
+    ) -> Result<(f64, f64, ModifiedCamClay<T>), ParamError> {
+        forbid("cohesion", self.cohesion.is_some(), model, " (Modified Cam Clay is cohesionless here)")?;
+        for (k, v) in mu_i_keys {
+            forbid(k, v.is_some(), model, "")?;
+        }
+        let m = match (self.mcc_m, self.friction_angle) {
+            (Some(_), Some(_)) => {
+                return Err(err("mcc_m", "and friction_angle are both given: give one (M = 6 sinφ / (3 − sinφ))"));
+            }
+            (Some(m), None) => m,
+            (None, Some(phi)) => {
+                if phi <= 0.0 {
+                    return Err(err("friction_angle", format!("must be > 0 degrees for model \"mcc\" (got {phi})")));
+                }
+                m_from_friction_angle(phi)
+            }
+            (None, None) => return Err(err("mcc_m", "is required for model \"mcc\" (or give friction_angle)")),
+        };
+        if !(m.is_finite() && m > 0.0 && m < 3.0) {
+            return Err(err("mcc_m", format!("must satisfy 0 < M < 3 (got {m})")));
+        }
+        let (kappa, lambda) = self.mcc_slopes()?;
+        let v_lambda = require("mcc_v_lambda", self.mcc_v_lambda, model)?;
+        if v_lambda <= 1.0 {
+            return Err(err("mcc_v_lambda", format!("must be > 1: it is a specific volume 1 + e (got {v_lambda})")));
+        }
+        let ocr = self.ocr.unwrap_or(1.0);
+        if !(ocr.is_finite() && ocr >= 1.0) {
+            return Err(err(
+                "ocr",
+                format!("must be ≥ 1 (got {ocr}); OCR < 1 puts the start outside the yield surface"),
+            ));
+        }
+        let floor = self.mcc_pc_floor.unwrap_or(100.0);
+        if !(floor.is_finite() && floor >= 0.0) {
+            return Err(err("mcc_pc_floor", format!("must be ≥ 0 Pa (got {floor}); 0 turns the floor off")));
+        }
+        let clamp = self.mcc_clamp_moduli.unwrap_or(true);
+        let safeguards = MccSafeguards {
+            moduli_clamp: if clamp { Some((T::of(0.1), T::one())) } else { None },
+            pc_floor: T::of(floor),
+        };
+        Ok((
+            m,
+            ocr,
+            ModifiedCamClay {
+                m: T::of(m),
+                kappa: T::of(kappa),
+                lambda: T::of(lambda),
+                v_lambda: T::of(v_lambda),
+                poisson: T::of(nu),
+                reference: elastic,
+                safeguards,
+            },
+        ))
+    }
+
+    /// κ (from `mcc_kappa` or `mcc_cr`) and λ (from `mcc_lambda` or `mcc_cc`): one of each pair,
+    /// both > 0 and λ > κ.
+    fn mcc_slopes(&self) -> Result<(f64, f64), ParamError> {
+        let kappa = match (self.mcc_kappa, self.mcc_cr) {
+            (Some(_), Some(_)) => {
+                return Err(err("mcc_kappa", "and mcc_cr are both given: give one (κ = Cr / ln 10)"));
+            }
+            (Some(k), None) => k,
+            (None, Some(cr)) => kappa_from_cr(cr),
+            (None, None) => return Err(err("mcc_kappa", "is required for model \"mcc\" (or give mcc_cr)")),
+        };
+        let lambda = match (self.mcc_lambda, self.mcc_cc) {
+            (Some(_), Some(_)) => {
+                return Err(err("mcc_lambda", "and mcc_cc are both given: give one (λ = Cc / ln 10)"));
+            }
+            (Some(l), None) => l,
+            (None, Some(cc)) => lambda_from_cc(cc),
+            (None, None) => return Err(err("mcc_lambda", "is required for model \"mcc\" (or give mcc_cc)")),
+        };
+        let kappa_key = if self.mcc_kappa.is_some() { "mcc_kappa" } else { "mcc_cr" };
+        let lambda_key = if self.mcc_lambda.is_some() { "mcc_lambda" } else { "mcc_cc" };
+        if !(kappa.is_finite() && kappa > 0.0) {
+            return Err(err(kappa_key, format!("must be > 0 (got {kappa})")));
+        }
+        if !(lambda.is_finite() && lambda > 0.0) {
+            return Err(err(lambda_key, format!("must be > 0 (got {lambda})")));
+        }
+        if lambda < kappa {
+            return Err(err(
+                lambda_key,
+                format!(
+                    "λ = {lambda} is smaller than κ = {kappa}: they look swapped. κ ({kappa_key}) is the swelling slope, \
+                     λ ({lambda_key}) the steeper normal compression slope; MCC needs λ > κ"
+                ),
+            ));
+        }
+        if lambda == kappa {
+            return Err(err(
+                lambda_key,
+                format!("must be greater than κ (both are {kappa}): the hardening law divides by λ − κ"),
+            ));
+        }
+        Ok((kappa, lambda))
     }
 
     /// The Modified Cam Clay keys and whether each is given.
