@@ -584,8 +584,7 @@ fn run_scene<T: Real>(
             "the soil's constrained modulus at the confining stress {sigma0} Pa is {modulus} Pa; the servo needs a stiff sample"
         )));
     }
-    let size_of = |sf: [[f64; 2]; 3]| sf.map(|[lo, hi]| hi - lo - d0);
-    let size0 = size_of(surfaces(&sim, t));
+    let size0 = sample_size(surfaces(&sim, t), d0);
     let longest = size0.iter().copied().fold(0.0, f64::max);
     let wave_speed = (modulus / density).sqrt();
     let tau = s.servo_crossings * longest / wave_speed;
@@ -597,7 +596,7 @@ fn run_scene<T: Real>(
     let probe = Probe { t, d0, run_err: &run_err };
     let consolidated = consolidate(&mut sim, &mut servo, &probe, s.tolerance, window_time)?;
     let consolidation_time = sim.time();
-    let size_c = size_of(surfaces(&sim, t));
+    let size_c = sample_size(surfaces(&sim, t), d0);
     // Shear.
     let series = shear(&mut sim, &mut servo, &probe, size_c, 0.5 * s.strain_rate * size_c[2], s.max_strain)?;
     let Picks { failure, h_f, fv, fh, bulk_failure, bulk_h, face_failure, face_h } =
@@ -647,6 +646,12 @@ fn run_scene<T: Real>(
         filtered: fv.into_iter().zip(fh).collect(),
         series,
     })
+}
+
+/// The sample's size along each axis (m): the span between the plates' surfaces `sf` less one
+/// spacing, as every reading of the test takes it.
+fn sample_size(sf: [[f64; 2]; 3], d0: f64) -> [f64; 3] {
+    sf.map(|[lo, hi]| hi - lo - d0)
 }
 
 /// Free slip on every plate: the normal of each marker is its plate's inward normal. The
@@ -725,7 +730,7 @@ impl Probe<'_> {
         let t0 = sim.time();
         sim.step_max(None).map_err(|e| (self.run_err)(e.to_string()))?;
         let sf = surfaces(sim, self.t);
-        let size = sf.map(|[lo, hi]| hi - lo - self.d0);
+        let size = sample_size(sf, self.d0);
         Ok(Reading {
             size,
             faces: face_stresses(sim, sf, size, self.d0),

@@ -257,10 +257,22 @@ pub(crate) fn resolve_vehicle(
             Some(Grousers { count: g.count, height: g.height, thickness: g.thickness })
         }
     };
-    let fsi = fsi_links(&model, v.fsi_links.as_deref(), &urdf_path, &e)?;
+    let wheel_links = model.wheel_links();
+    let fsi = match v.fsi_links.as_deref() {
+        None => wheel_links.clone(),
+        Some(list) => fsi_links(&model, list, &urdf_path, &e)?,
+    };
     let base = Pose::from_rpy_deg([xy[0], xy[1], z.unwrap_or(0.0)], orientation);
     let first_body = bodies.len();
-    let links = Links { name: &name, key: &key, fsi: &fsi, grousers, friction, layers: layers as usize };
+    let links = Links {
+        name: &name,
+        key: &key,
+        wheel_links: &wheel_links,
+        fsi: &fsi,
+        grousers,
+        friction,
+        layers: layers as usize,
+    };
     let wheels = link_bodies(&model, &base, &links, bodies);
     for b in &bodies[first_body..] {
         check_fsi_meshes(b, &e)?;
@@ -327,17 +339,16 @@ pub(crate) fn resolve_vehicle(
     })
 }
 
-/// `fsi_links`: the links that get markers (default: the wheel links). A link lumped into its
-/// parent by a fixed joint selects that parent; each needs collision geometry.
+/// The links `fsi_links` names (without it, the wheel links get markers). A link lumped into
+/// its parent by a fixed joint selects that parent; each needs collision geometry.
 fn fsi_links(
     model: &UrdfModel,
-    names_given: Option<&[String]>,
+    list: &[String],
     urdf_path: &Path,
     e: &dyn Fn(&str, String) -> InputError,
 ) -> Result<Vec<usize>, InputError> {
     let names: Vec<&str> =
         model.links.iter().map(|l| l.name.as_str()).chain(model.frames.iter().map(|f| f.name.as_str())).collect();
-    let Some(list) = names_given else { return Ok(model.wheel_links()) };
     list.iter()
         .map(|n| {
             let (l, _) = model
@@ -355,6 +366,8 @@ fn fsi_links(
 struct Links<'a> {
     name: &'a str,
     key: &'a str,
+    /// Links on a continuous joint whose collision is a wheel ([`UrdfModel::wheel_links`]).
+    wheel_links: &'a [usize],
     fsi: &'a [usize],
     grousers: Option<Grousers>,
     friction: f64,
@@ -365,13 +378,12 @@ struct Links<'a> {
 /// on a continuous joint whose collision is a wheel (an FSI wheel takes that shape, grousers
 /// included).
 fn link_bodies(model: &UrdfModel, base: &Pose, l: &Links, bodies: &mut Vec<BodySpec>) -> Vec<WheelSpec> {
-    let wheel_links = model.wheel_links();
     let poses = model.link_poses(base);
     let base_inv_rot = [-base.rotation[0], -base.rotation[1], -base.rotation[2], base.rotation[3]];
     let mut wheels = Vec::new();
     for (li, link) in model.links.iter().enumerate() {
         let joint = model.joints.iter().position(|j| j.child == li);
-        let is_wheel = wheel_links.contains(&li);
+        let is_wheel = l.wheel_links.contains(&li);
         let mut shape = combine(&link.collision);
         if is_wheel && let Some(ji) = joint {
             let j = &model.joints[ji];
